@@ -1,0 +1,145 @@
+#include "geometry/clipper_ops.hpp"
+
+#include "geometry/polygon.hpp"
+
+#include <clipper.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace staa {
+
+namespace {
+
+namespace cl = ClipperLib;
+
+// Clipper works on integers: 1 unit = 1 micrometre keeps every map far inside its range.
+constexpr double kScale = 1e6;
+
+cl::Path toPath(const Polygon& poly) {
+  cl::Path path;
+  path.reserve(poly.size());
+  for (const Vec2& p : poly) {
+    path.emplace_back(static_cast<cl::cInt>(std::llround(p.x() * kScale)),
+                      static_cast<cl::cInt>(std::llround(p.y() * kScale)));
+  }
+  return path;
+}
+
+Polygon toPolygon(const cl::Path& path) {
+  Polygon poly;
+  poly.reserve(path.size());
+  for (const cl::IntPoint& p : path) poly.emplace_back(p.X / kScale, p.Y / kScale);
+  return poly;
+}
+
+cl::Paths toPaths(const std::vector<Polygon>& polygons) {
+  cl::Paths paths;
+  paths.reserve(polygons.size());
+  for (const Polygon& p : polygons) {
+    if (p.size() >= 3) paths.push_back(toPath(p));
+  }
+  return paths;
+}
+
+void collect(const cl::PolyNode& node, std::vector<PolygonWithHoles>& out) {
+  for (const cl::PolyNode* child : node.Childs) {
+    // Children of the root (and of holes) are outer boundaries; their children are holes.
+    PolygonWithHoles region;
+    region.outer = toPolygon(child->Contour);
+    if (!isCounterClockwise(region.outer)) std::reverse(region.outer.begin(), region.outer.end());
+    for (const cl::PolyNode* hole : child->Childs) {
+      Polygon h = toPolygon(hole->Contour);
+      if (isCounterClockwise(h)) std::reverse(h.begin(), h.end());
+      region.holes.push_back(std::move(h));
+      collect(*hole, out);  // islands inside the hole
+    }
+    out.push_back(std::move(region));
+  }
+}
+
+std::vector<PolygonWithHoles> solve(cl::Clipper& clipper, cl::ClipType type, cl::PolyFillType fill) {
+  cl::PolyTree tree;
+  clipper.StrictlySimple(true);
+  clipper.Execute(type, tree, fill, fill);
+  std::vector<PolygonWithHoles> out;
+  collect(tree, out);
+  return out;
+}
+
+void addRegion(const PolygonWithHoles& r, cl::Clipper& clipper) {
+  clipper.AddPath(toPath(r.outer), cl::ptSubject, true);
+  for (const Polygon& h : r.holes) clipper.AddPath(toPath(h), cl::ptSubject, true);
+}
+
+void splitRegion(const PolygonWithHoles& region, double overlap, std::vector<Polygon>& out, int depth) {
+  if (region.holes.empty() || depth > 64) {
+    out.push_back(region.outer);
+    return;
+  }
+  // Cut through the middle of the first hole's extent: the vertical line crosses that hole,
+  // so neither half keeps it closed. Cutting never creates holes, so this terminates.
+  const Box hb = boundingBox(region.holes.front());
+  const double c = 0.5 * (hb.min.x() + hb.max.x());
+  const double e = std::min(overlap, 0.25 * hb.width());
+  const Box rb = boundingBox(region.outer);
+  const double y0 = rb.min.y() - 1.0, y1 = rb.max.y() + 1.0;
+  const Polygon left{{rb.min.x() - 1.0, y0}, {c + e, y0}, {c + e, y1}, {rb.min.x() - 1.0, y1}};
+  const Polygon right{{c - e, y0}, {rb.max.x() + 1.0, y0}, {rb.max.x() + 1.0, y1}, {c - e, y1}};
+  for (const Polygon* half : {&left, &right}) {
+    cl::Clipper clipper;
+    addRegion(region, clipper);
+    clipper.AddPath(toPath(*half), cl::ptClip, true);
+    for (const PolygonWithHoles& piece : solve(clipper, cl::ctIntersection, cl::pftEvenOdd)) {
+      splitRegion(piece, overlap, out, depth + 1);
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<PolygonWithHoles> unitePolygons(const std::vector<Polygon>& polygons) {
+  cl::Clipper clipper;
+  cl::Paths paths = toPaths(polygons);
+  // Nonzero fill needs a consistent winding: orient every input counter-clockwise.
+  for (cl::Path& p : paths) {
+    if (!cl::Orientation(p)) cl::ReversePath(p);
+  }
+  clipper.AddPaths(paths, cl::ptSubject, true);
+  return solve(clipper, cl::ctUnion, cl::pftNonZero);
+}
+
+std::vector<PolygonWithHoles> inflatePolygons(const std::vector<Polygon>& polygons, double radius,
+                                              double arc_tolerance) {
+  cl::Paths paths = toPaths(polygons);
+  for (cl::Path& p : paths) {
+    if (!cl::Orientation(p)) cl::ReversePath(p);
+  }
+  // Union first so that overlapping inputs do not offset into each other's interior.
+  cl::Paths united;
+  {
+    cl::Clipper clipper;
+    clipper.AddPaths(paths, cl::ptSubject, true);
+    clipper.Execute(cl::ctUnion, united, cl::pftNonZero, cl::pftNonZero);
+  }
+  cl::ClipperOffset offset(2.0, std::max(arc_tolerance, 1e-6) * kScale);
+  offset.AddPaths(united, cl::jtRound, cl::etClosedPolygon);
+  cl::Paths grown;
+  offset.Execute(grown, radius * kScale);
+  cl::Clipper clipper;
+  clipper.AddPaths(grown, cl::ptSubject, true);
+  return solve(clipper, cl::ctUnion, cl::pftNonZero);
+}
+
+std::vector<Polygon> removeHoles(const std::vector<PolygonWithHoles>& regions, double overlap) {
+  std::vector<Polygon> out;
+  for (const PolygonWithHoles& r : regions) splitRegion(r, overlap, out, 0);
+  return out;
+}
+
+std::vector<Polygon> inflateToSimple(const std::vector<Polygon>& polygons, double radius, double arc_tolerance) {
+  return removeHoles(inflatePolygons(polygons, radius, arc_tolerance));
+}
+
+}  // namespace staa

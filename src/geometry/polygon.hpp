@@ -1,0 +1,48 @@
+#pragma once
+// Elementary polygon predicates and measures. None of them allocates.
+
+#include "geometry/types.hpp"
+
+#include <optional>
+
+namespace staa {
+
+// Shoelace area: positive for counter-clockwise winding.
+double signedArea(PolygonView poly);
+inline bool isCounterClockwise(PolygonView poly) { return signedArea(poly) > 0.0; }
+
+Box boundingBox(PolygonView poly);
+
+// Where a point lies relative to a polygon; the boundary is reported separately so that
+// callers decide whether touching counts (a path may slide along a wall, a robot may not).
+enum class Containment { kOutside, kBoundary, kInside };
+Containment locatePoint(const Vec2& p, PolygonView poly, double eps = 1e-9);
+// True for points strictly inside (boundary excluded).
+inline bool pointInPolygon(const Vec2& p, PolygonView poly) {
+  return locatePoint(p, poly) == Containment::kInside;
+}
+
+// Closed segments [a, b] and [c, d] share at least one point.
+bool segmentsIntersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d);
+// The segments cross at a single point interior to both (no touching, no collinear overlap).
+bool segmentsCrossProperly(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d);
+// Intersection point of the lines through [a,b] and [c,d] as the parameter along [a,b],
+// if the closed segments intersect at a single point.
+std::optional<double> segmentIntersectionParam(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d);
+
+Vec2 closestPointOnSegment(const Vec2& p, const Vec2& a, const Vec2& b);
+double distancePointSegment(const Vec2& p, const Vec2& a, const Vec2& b);
+// Distance from p to the nearest edge or vertex of the polygon (0 on the boundary; the
+// same value inside and outside: the caller combines it with locatePoint when it matters).
+double distanceToEdges(const Vec2& p, PolygonView poly);
+
+// A simple polygon: no two non-adjacent edges touch, adjacent edges meet only at their shared
+// vertex. Returns the index of the first offending edge pair, or nullopt when simple.
+// O(n^2): for validation at load time, not for the cycle.
+struct EdgePair {
+  std::size_t first;
+  std::size_t second;
+};
+std::optional<EdgePair> findSelfIntersection(PolygonView poly);
+
+}  // namespace staa
