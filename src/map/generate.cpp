@@ -1,0 +1,3 @@
+#include "map/generate.hpp"
+
+namespace staa {}  // namespace staa

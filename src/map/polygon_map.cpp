@@ -1,0 +1,3 @@
+#include "map/polygon_map.hpp"
+
+namespace staa {}  // namespace staa

@@ -1,0 +1,3 @@
+#include "map/ros_import.hpp"
+
+namespace staa {}  // namespace staa
