@@ -142,4 +142,15 @@ std::vector<Polygon> inflateToSimple(const std::vector<Polygon>& polygons, doubl
   return removeHoles(inflatePolygons(polygons, radius, arc_tolerance));
 }
 
+std::vector<Polygon> inflateEachToSimple(const std::vector<Polygon>& polygons, double radius, double arc_tolerance) {
+  std::vector<Polygon> out;
+  out.reserve(polygons.size());
+  std::vector<Polygon> one(1);
+  for (const Polygon& p : polygons) {
+    one[0] = p;
+    for (Polygon& piece : removeHoles(inflatePolygons(one, radius, arc_tolerance))) out.push_back(std::move(piece));
+  }
+  return out;
+}
+
 }  // namespace staa

@@ -33,4 +33,10 @@ std::vector<Polygon> removeHoles(const std::vector<PolygonWithHoles>& regions, d
 std::vector<Polygon> inflateToSimple(const std::vector<Polygon>& polygons, double radius,
                                      double arc_tolerance = 0.01);
 
+// Inflates every polygon on its own (no union), each result made simple by removeHoles. The
+// pieces overlap where the inputs were close. Preferred for shortest-path search: a lazy
+// visibility graph then discovers one small polygon at a time instead of a building-sized one.
+std::vector<Polygon> inflateEachToSimple(const std::vector<Polygon>& polygons, double radius,
+                                         double arc_tolerance = 0.01);
+
 }  // namespace staa

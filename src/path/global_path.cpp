@@ -1,0 +1,87 @@
+#include "path/global_path.hpp"
+
+#include "geometry/clipper_ops.hpp"
+
+#include <algorithm>
+
+namespace staa {
+
+const char* toString(PathStatus status) {
+  switch (status) {
+    case PathStatus::kFound: return "found";
+    case PathStatus::kNoPath: return "no path";
+    case PathStatus::kGoalInObstacle: return "goal inside an obstacle";
+    case PathStatus::kStartBlocked: return "no free space near the start";
+  }
+  return "unknown";
+}
+
+std::vector<Polygon> boundsWalls(const Box& b, double t) {
+  const double x0 = b.min.x(), y0 = b.min.y(), x1 = b.max.x(), y1 = b.max.y();
+  return {
+      {{x0 - t, y0 - t}, {x1 + t, y0 - t}, {x1 + t, y0}, {x0 - t, y0}},  // below
+      {{x0 - t, y1}, {x1 + t, y1}, {x1 + t, y1 + t}, {x0 - t, y1 + t}},  // above
+      {{x0 - t, y0 - t}, {x0, y0 - t}, {x0, y1 + t}, {x0 - t, y1 + t}},  // left
+      {{x1, y0 - t}, {x1 + t, y0 - t}, {x1 + t, y1 + t}, {x1, y1 + t}},  // right
+  };
+}
+
+GlobalPathPlanner::GlobalPathPlanner(const PolygonMap& map, const GlobalPathOptions& options)
+    : options_(options), search_(options.search) {
+  real_ = map.obstacles;
+  bounds_ = map.bounds;
+  if (map.bounds) {
+    const auto walls = boundsWalls(*map.bounds, std::max(1.0, 2.0 * options.inflation_radius_m));
+    real_.insert(real_.end(), walls.begin(), walls.end());
+  }
+  inflated_ = options.inflation_radius_m > 0.0
+                  ? inflateEachToSimple(real_, options.inflation_radius_m, options.arc_tolerance_m)
+                  : real_;
+  real_set_.assign(std::span<const Polygon>(real_), PolygonSet::Options{options.search.grid_cell_m});
+  search_.setStaticObstacles(inflated_);
+}
+
+bool GlobalPathPlanner::insideRealObstacle(const Vec2& p) const {
+  if (bounds_ && !bounds_->contains(p)) return true;
+  return real_set_.pointBlocked(p);
+}
+
+GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal) {
+  search_.clearDynamicObstacles();
+  return run(start, goal, false);
+}
+
+GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated) {
+  search_.setDynamicObstacles(dynamic_inflated);
+  GlobalPath path = run(start, goal, true);
+  if (path.status == PathStatus::kFound || path.status == PathStatus::kGoalInObstacle) return path;
+  // A moving obstacle closes the way: plan as if it were not there (paper, Sec. III-B).
+  return run(start, goal, false);
+}
+
+GlobalPath GlobalPathPlanner::run(const Vec2& start, const Vec2& goal, bool with_dynamic) {
+  GlobalPath out;
+  if (insideRealObstacle(goal)) {
+    out.status = PathStatus::kGoalInObstacle;
+    return out;
+  }
+  const MinimalConstruct::Result r = search_.query(start, goal, with_dynamic);
+  out.expansions = r.expansions;
+  out.edge_checks = r.edge_checks;
+  out.start_moved = r.start_moved;
+  out.goal_moved = r.goal_moved;
+  switch (r.status) {
+    case MinimalConstruct::Status::kFound:
+      out.status = PathStatus::kFound;
+      out.path = r.path;
+      out.length = r.length;
+      out.dynamic = with_dynamic && search_.dynamicObstacles().polygonCount() > 0;
+      break;
+    case MinimalConstruct::Status::kNoPath: out.status = PathStatus::kNoPath; break;
+    case MinimalConstruct::Status::kStartBlocked: out.status = PathStatus::kStartBlocked; break;
+    case MinimalConstruct::Status::kGoalBlocked: out.status = PathStatus::kNoPath; break;
+  }
+  return out;
+}
+
+}  // namespace staa

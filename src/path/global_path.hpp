@@ -1,0 +1,73 @@
+#pragma once
+// The global path of the control cycle (paper, Sec. III-B): the shortest path in the
+// inflated map M' (static), or in M' united with the inflated moving obstacles D' (dynamic),
+// falling back to the static path when D' closes every way (a person in a door).
+
+#include "map/polygon_map.hpp"
+#include "path/minimal_construct.hpp"
+
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace staa {
+
+struct GlobalPathOptions {
+  double inflation_radius_m = 0.3;  // at least the robot's radius
+  double arc_tolerance_m = 0.01;    // chord error of the inflated round corners
+  MinimalConstruct::Options search;
+};
+
+enum class PathStatus : std::uint8_t {
+  kFound,
+  kNoPath,           // start and goal are not connected in M'
+  kGoalInObstacle,   // the goal lies inside a real (uninflated) obstacle or outside the bounds
+  kStartBlocked,     // no free point near the start
+};
+
+const char* toString(PathStatus status);
+
+struct GlobalPath {
+  PathStatus status = PathStatus::kNoPath;
+  std::span<const Vec2> path;  // valid until the next query
+  double length = 0.0;
+  bool dynamic = false;        // found in M' ∪ D' (false: static, or the static fallback)
+  bool start_moved = false;
+  bool goal_moved = false;
+  std::uint32_t expansions = 0;
+  std::uint32_t edge_checks = 0;
+};
+
+class GlobalPathPlanner {
+ public:
+  // Builds M' from the map's obstacles and bounds (load time: allocates).
+  GlobalPathPlanner(const PolygonMap& map, const GlobalPathOptions& options);
+
+  // Static path in M'.
+  GlobalPath plan(const Vec2& start, const Vec2& goal);
+  // Dynamic path in M' ∪ D' (D': already inflated), else the static path. No allocation.
+  GlobalPath plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated);
+
+  // The inflated obstacles M' as simple polygons (for the local map and for drawing).
+  const std::vector<Polygon>& inflatedObstacles() const { return inflated_; }
+  // The real obstacles including the walls that stand for the map's bounds.
+  const std::vector<Polygon>& realObstacles() const { return real_; }
+  const GlobalPathOptions& options() const { return options_; }
+  // True when p lies strictly inside a real obstacle or outside the bounds.
+  bool insideRealObstacle(const Vec2& p) const;
+
+ private:
+  GlobalPath run(const Vec2& start, const Vec2& goal, bool with_dynamic);
+
+  GlobalPathOptions options_;
+  std::vector<Polygon> real_;
+  std::vector<Polygon> inflated_;
+  PolygonSet real_set_;
+  std::optional<Box> bounds_;
+  MinimalConstruct search_;
+};
+
+// Walls standing for "outside the bounds is blocked": four slabs of `thickness` around the box.
+std::vector<Polygon> boundsWalls(const Box& bounds, double thickness);
+
+}  // namespace staa

@@ -1,0 +1,457 @@
+#include "path/minimal_construct.hpp"
+
+#include "geometry/polygon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace staa {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr std::uint32_t kNoPolygon = std::numeric_limits<std::uint32_t>::max();
+
+int sgn(double v) { return (v > 0.0) - (v < 0.0); }
+
+// Segment from `at` towards `other` touches the polygon at corner `at` (neighbours prev and
+// next) without cutting into it: both neighbours lie on the same side of the line.
+bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next) {
+  return sgn(orient(at, other, prev)) * sgn(orient(at, other, next)) >= 0;
+}
+
+std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+}
+
+std::size_t hashKey(std::uint64_t k) {
+  k ^= k >> 33;
+  k *= 0xff51afd7ed558ccdULL;
+  k ^= k >> 33;
+  return static_cast<std::size_t>(k);
+}
+
+}  // namespace
+
+void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
+  PolygonSet::Options opt;
+  opt.cell_size = options_.grid_cell_m;
+  static_.assign(polygons, opt);
+  dynamic_.reserve(options_.max_dynamic_polygons, options_.max_dynamic_vertices);
+  dynamic_.clear();
+  static_discovered_.assign(static_.polygonCount(), 0);
+  dynamic_discovered_.assign(options_.max_dynamic_polygons, 0);
+  const std::size_t max_nodes = static_.vertexCount() + options_.max_dynamic_vertices + 2;
+  nodes_.reserve(max_nodes);
+  heap_.reserve(max_nodes);
+  closed_.reserve(max_nodes);
+  path_.reserve(max_nodes + 2);
+  blockers_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
+  covering_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
+  pending_.clear();
+  pending_.reserve(static_.polygonCount() + options_.max_dynamic_polygons);
+  std::size_t slots = 1024;
+  while (slots < 4 * max_nodes) slots *= 2;
+  blocked_keys_.assign(slots, 0);
+  blocked_gen_.assign(slots, 0);
+  blocked_generation_ = 1;
+  have_goal_ = false;
+  total_discovered_ = 0;
+}
+
+void MinimalConstruct::setDynamicObstacles(std::span<const PolygonView> polygons) {
+  // Keep within the reserved capacity: drop what does not fit rather than allocate.
+  std::size_t n = 0, verts = 0;
+  for (const PolygonView& p : polygons) {
+    if (n == options_.max_dynamic_polygons || verts + p.size() > options_.max_dynamic_vertices) break;
+    ++n;
+    verts += p.size();
+  }
+  dropped_dynamic_ = polygons.size() - n;
+  dynamic_.assign(polygons.first(n), PolygonSet::Options{});
+}
+
+void MinimalConstruct::clearDynamicObstacles() {
+  dynamic_.clear();
+  dropped_dynamic_ = 0;
+}
+
+const Vec2& MinimalConstruct::cornerPos(std::int32_t v) const {
+  const auto sv = static_cast<std::size_t>(v);
+  return sv < static_.vertexCount() ? static_.vertex(sv) : dynamic_.vertex(sv - static_.vertexCount());
+}
+
+const Vec2& MinimalConstruct::cornerPrev(std::int32_t v) const {
+  const auto sv = static_cast<std::size_t>(v);
+  if (sv < static_.vertexCount()) return static_.vertex(static_.prevVertex(sv));
+  const std::size_t d = sv - static_.vertexCount();
+  return dynamic_.vertex(dynamic_.prevVertex(d));
+}
+
+const Vec2& MinimalConstruct::cornerNext(std::int32_t v) const {
+  const auto sv = static_cast<std::size_t>(v);
+  if (sv < static_.vertexCount()) return static_.vertex(static_.nextVertex(sv));
+  const std::size_t d = sv - static_.vertexCount();
+  return dynamic_.vertex(dynamic_.nextVertex(d));
+}
+
+bool MinimalConstruct::pointFree(const Vec2& p, bool with_dynamic) const {
+  return !static_.pointBlocked(p) && !(with_dynamic && dynamic_.pointBlocked(p));
+}
+
+bool MinimalConstruct::segmentFree(const Vec2& a, const Vec2& b, bool with_dynamic) const {
+  return !static_.segmentBlocked(a, b) && !(with_dynamic && dynamic_.segmentBlocked(a, b));
+}
+
+bool MinimalConstruct::nearestFreePoint(const Vec2& p, bool with_dynamic, Vec2& out) const {
+  if (pointFree(p, with_dynamic)) {
+    out = p;
+    return true;
+  }
+  // Nearest boundary point of either set that neither set covers; candidates are tried in
+  // order of distance (repeated minimum selection: no allocation, rare and short).
+  const std::size_t ns = static_.vertexCount();
+  const std::size_t nd = with_dynamic ? dynamic_.vertexCount() : 0;
+  double floor_d = -1.0;
+  std::size_t floor_v = std::numeric_limits<std::size_t>::max();
+  for (std::size_t attempt = 0; attempt < ns + nd; ++attempt) {
+    double best = kInf;
+    std::size_t best_v = std::numeric_limits<std::size_t>::max();
+    Vec2 best_q = p, best_edge{1.0, 0.0};
+    for (std::size_t v = 0; v < ns + nd; ++v) {
+      const bool is_static = v < ns;
+      const PolygonSet& set = is_static ? static_ : dynamic_;
+      const std::size_t local = is_static ? v : v - ns;
+      const Vec2& a = set.vertex(local);
+      const Vec2& b = set.vertex(set.nextVertex(local));
+      const Vec2 q = closestPointOnSegment(p, a, b);
+      const double d = (q - p).norm();
+      if (d < floor_d || (d == floor_d && v <= floor_v)) continue;
+      if (d < best || (d == best && v < best_v)) {
+        best = d;
+        best_v = v;
+        best_q = q;
+        best_edge = b - a;
+      }
+    }
+    if (best_v == std::numeric_limits<std::size_t>::max()) break;
+    floor_d = best;
+    floor_v = best_v;
+    Vec2 dir = best_q - p;
+    const double len = dir.norm();
+    dir = len > 0.0 ? Vec2(dir / len) : Vec2(Vec2(best_edge.y(), -best_edge.x()).normalized());
+    const Vec2 candidate = best_q + 1e-6 * dir;
+    if (pointFree(candidate, with_dynamic)) {
+      out = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
+void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
+  // Polygons discovered for the same goal are known to matter: keep them.
+  if (!have_goal_ || goal != goal_pos_) {
+    std::fill(static_discovered_.begin(), static_discovered_.end(), 0);
+    goal_pos_ = goal;
+    have_goal_ = true;
+  }
+  std::fill(dynamic_discovered_.begin(), dynamic_discovered_.end(), 0);
+  nodes_.clear();
+  heap_.clear();
+  closed_.clear();
+  if (++blocked_generation_ == 0) {
+    std::fill(blocked_gen_.begin(), blocked_gen_.end(), 0);
+    blocked_generation_ = 1;
+  }
+  blocked_count_ = 0;
+  total_discovered_ = 0;
+  nodes_.push_back(Node{});  // 0: start
+  nodes_.push_back(Node{});  // 1: goal
+  for (std::size_t k = 0; k < static_discovered_.size(); ++k) {
+    if (static_discovered_[k]) {
+      static_discovered_[k] = 0;  // discoverPolygon sets it again and adds the corners
+      discoverPolygon(static_cast<std::uint32_t>(k), with_dynamic);
+    }
+  }
+}
+
+void MinimalConstruct::discoverPolygon(std::uint32_t global_polygon, bool with_dynamic) {
+  // A worklist, not recursion: overlapping polygons can form long chains.
+  pending_.push_back(global_polygon);
+  while (!pending_.empty()) {
+    const std::uint32_t k = pending_.back();
+    pending_.pop_back();
+    discoverOne(k, with_dynamic);
+  }
+}
+
+void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynamic) {
+  const auto ns_poly = static_cast<std::uint32_t>(static_.polygonCount());
+  const bool is_static = global_polygon < ns_poly;
+  const std::uint32_t local = is_static ? global_polygon : global_polygon - ns_poly;
+  std::uint8_t& flag = is_static ? static_discovered_[local] : dynamic_discovered_[local];
+  if (flag) return;
+  flag = 1;
+  ++total_discovered_;
+  const PolygonSet& set = is_static ? static_ : dynamic_;
+  const PolygonView poly = set.polygon(local);
+  const std::size_t first = static_cast<std::size_t>(poly.data() - &set.vertex(0));
+  const std::size_t offset = is_static ? 0 : static_.vertexCount();
+  const std::size_t first_new = nodes_.size();
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const std::size_t v = first + i;
+    // Only convex corners in free space can be turning points of a shortest path.
+    if (!set.isConvexCorner(v)) continue;
+    const Vec2& p = set.vertex(v);
+    // A corner inside another polygon is not a node, but that polygon bounds the free space
+    // right here, so it joins the graph too: without it, the way around both is missing.
+    bool covered = false;
+    std::size_t n = static_.coveringPolygons(p, is_static ? local : kNoPolygon, covering_);
+    for (std::size_t j = 0; j < n; ++j) {
+      covered = true;
+      if (!static_discovered_[covering_[j]]) pending_.push_back(covering_[j]);
+    }
+    if (with_dynamic) {
+      n = dynamic_.coveringPolygons(p, is_static ? kNoPolygon : local, covering_);
+      for (std::size_t j = 0; j < n; ++j) {
+        covered = true;
+        if (!dynamic_discovered_[covering_[j]]) pending_.push_back(covering_[j] + ns_poly);
+      }
+    }
+    if (covered) continue;
+    Node node;
+    node.pos = p;
+    node.vertex = static_cast<std::int32_t>(v + offset);
+    nodes_.push_back(node);
+  }
+  // Connect the new corners to everything already closed (the repair step).
+  for (std::size_t n = first_new; n < nodes_.size(); ++n) {
+    for (const std::int32_t c : closed_) relax(c, static_cast<std::int32_t>(n));
+  }
+}
+
+bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
+  const Node& a = nodes_[static_cast<std::size_t>(from)];
+  const Node& b = nodes_[static_cast<std::size_t>(to)];
+  if (a.vertex != kNone) {
+    const Vec2& prev = cornerPrev(a.vertex);
+    const Vec2& next = cornerNext(a.vertex);
+    if (!tangentAt(a.pos, b.pos, prev, next)) return false;
+    // The path must turn around the corner, towards the side the polygon lies on.
+    if (a.parent != kNone) {
+      const Vec2& u = nodes_[static_cast<std::size_t>(a.parent)].pos;
+      int side = sgn(orient(u, a.pos, prev));
+      if (side == 0) side = sgn(orient(u, a.pos, next));
+      const int turn = sgn(orient(u, a.pos, b.pos));
+      if (turn != 0 && turn != side) return false;
+    }
+  }
+  if (b.vertex != kNone && !tangentAt(b.pos, a.pos, cornerPrev(b.vertex), cornerNext(b.vertex))) return false;
+  return true;
+}
+
+void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
+  Node& b = nodes_[static_cast<std::size_t>(to)];
+  if (b.state == kClosed) return;
+  const Node& a = nodes_[static_cast<std::size_t>(from)];
+  const double g = a.g + (b.pos - a.pos).norm();
+  if (b.state == kOpen && g >= b.g) return;
+  if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return;
+  b.g = g;
+  b.f = g + (goal_pos_ - b.pos).norm();
+  b.parent = from;
+  if (b.state == kOpen) {
+    heapDecrease(to);
+  } else {
+    b.state = kOpen;
+    heapPush(to);
+  }
+}
+
+void MinimalConstruct::repairParent(std::int32_t node) {
+  Node& n = nodes_[static_cast<std::size_t>(node)];
+  n.state = kUnseen;
+  n.parent = kNone;
+  n.g = kInf;
+  for (const std::int32_t c : closed_) relax(c, node);
+}
+
+bool MinimalConstruct::edgeKnownBlocked(std::int32_t a, std::int32_t b) const {
+  if (blocked_count_ == 0) return false;
+  const std::uint64_t key = edgeKey(a, b);
+  const std::size_t mask = blocked_keys_.size() - 1;
+  for (std::size_t i = hashKey(key) & mask;; i = (i + 1) & mask) {
+    if (blocked_gen_[i] != blocked_generation_) return false;
+    if (blocked_keys_[i] == key) return true;
+  }
+}
+
+void MinimalConstruct::markEdgeBlocked(std::int32_t a, std::int32_t b) {
+  if (2 * (blocked_count_ + 1) > blocked_keys_.size()) {
+    // Pathological: more failed edges than four per node. Grow (allocates) rather than loop.
+    std::vector<std::uint64_t> keys;
+    for (std::size_t i = 0; i < blocked_keys_.size(); ++i) {
+      if (blocked_gen_[i] == blocked_generation_) keys.push_back(blocked_keys_[i]);
+    }
+    blocked_keys_.assign(blocked_keys_.size() * 2, 0);
+    blocked_gen_.assign(blocked_gen_.size() * 2, 0);
+    blocked_count_ = 0;
+    for (const std::uint64_t k : keys) {
+      markEdgeBlocked(static_cast<std::int32_t>(k >> 32), static_cast<std::int32_t>(k & 0xffffffffU));
+    }
+  }
+  const std::uint64_t key = edgeKey(a, b);
+  const std::size_t mask = blocked_keys_.size() - 1;
+  for (std::size_t i = hashKey(key) & mask;; i = (i + 1) & mask) {
+    if (blocked_gen_[i] != blocked_generation_) {
+      blocked_gen_[i] = blocked_generation_;
+      blocked_keys_[i] = key;
+      ++blocked_count_;
+      return;
+    }
+    if (blocked_keys_[i] == key) return;
+  }
+}
+
+MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec2& goal_in, bool with_dynamic) {
+  Result result;
+  path_.clear();
+  edge_checks_ = 0;
+  const bool use_dynamic = with_dynamic && dynamic_.polygonCount() > 0;
+
+  Vec2 start, goal;
+  if (!nearestFreePoint(start_in, use_dynamic, start)) {
+    result.status = Status::kStartBlocked;
+    return result;
+  }
+  if (!nearestFreePoint(goal_in, use_dynamic, goal)) {
+    result.status = Status::kGoalBlocked;
+    return result;
+  }
+  result.start_moved = start != start_in;
+  result.goal_moved = goal != goal_in;
+
+  resetSearch(goal, use_dynamic);
+  Node& s = nodes_[0];
+  s.pos = start;
+  s.g = 0.0;
+  s.f = (goal - start).norm();
+  s.state = kOpen;
+  nodes_[1].pos = goal;
+  nodes_[1].g = kInf;
+  heapPush(0);
+
+  const std::size_t ns_poly = static_.polygonCount();
+  bool found = false;
+  while (!heap_.empty()) {
+    const std::int32_t v = heapPop();
+    Node& node = nodes_[static_cast<std::size_t>(v)];
+    if (node.parent != kNone) {
+      // The lazy step: only now is the edge into v checked against the obstacles.
+      const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
+      ++edge_checks_;
+      std::size_t nb = static_.segmentBlockers(u, node.pos, blockers_);
+      if (use_dynamic) {
+        const std::size_t nd =
+            dynamic_.segmentBlockers(u, node.pos, std::span<std::uint32_t>(blockers_).subspan(nb));
+        for (std::size_t i = nb; i < nb + nd; ++i) blockers_[i] += static_cast<std::uint32_t>(ns_poly);
+        nb += nd;
+      }
+      if (nb > 0) {
+        markEdgeBlocked(node.parent, v);
+        for (std::size_t i = 0; i < nb; ++i) discoverPolygon(blockers_[i], use_dynamic);
+        repairParent(v);
+        continue;
+      }
+    }
+    node.state = kClosed;
+    closed_.push_back(v);
+    ++result.expansions;
+    if (v == 1) {
+      found = true;
+      break;
+    }
+    for (std::size_t w = 1; w < nodes_.size(); ++w) relax(v, static_cast<std::int32_t>(w));
+  }
+  result.edge_checks = edge_checks_;
+  result.discovered = total_discovered_;
+  if (!found) {
+    result.status = Status::kNoPath;
+    return result;
+  }
+
+  // Walk the parents back from the goal, then reverse in place.
+  if (result.goal_moved) path_.push_back(goal_in);
+  for (std::int32_t n = 1; n != kNone; n = nodes_[static_cast<std::size_t>(n)].parent) {
+    path_.push_back(nodes_[static_cast<std::size_t>(n)].pos);
+  }
+  if (result.start_moved) path_.push_back(start_in);
+  std::reverse(path_.begin(), path_.end());
+  double length = 0.0;
+  for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
+  result.status = Status::kFound;
+  result.path = path_;
+  result.length = length;
+  return result;
+}
+
+// ---- indexed heap ----
+
+bool MinimalConstruct::heapLess(std::int32_t a, std::int32_t b) const {
+  const Node& na = nodes_[static_cast<std::size_t>(a)];
+  const Node& nb = nodes_[static_cast<std::size_t>(b)];
+  if (na.f != nb.f) return na.f < nb.f;
+  if (na.g != nb.g) return na.g > nb.g;
+  return a < b;
+}
+
+void MinimalConstruct::heapUp(std::size_t i) {
+  const std::int32_t n = heap_[i];
+  while (i > 0) {
+    const std::size_t parent = (i - 1) / 2;
+    if (!heapLess(n, heap_[parent])) break;
+    heap_[i] = heap_[parent];
+    nodes_[static_cast<std::size_t>(heap_[i])].heap_pos = static_cast<std::int32_t>(i);
+    i = parent;
+  }
+  heap_[i] = n;
+  nodes_[static_cast<std::size_t>(n)].heap_pos = static_cast<std::int32_t>(i);
+}
+
+void MinimalConstruct::heapDown(std::size_t i) {
+  const std::int32_t n = heap_[i];
+  const std::size_t size = heap_.size();
+  for (;;) {
+    std::size_t child = 2 * i + 1;
+    if (child >= size) break;
+    if (child + 1 < size && heapLess(heap_[child + 1], heap_[child])) ++child;
+    if (!heapLess(heap_[child], n)) break;
+    heap_[i] = heap_[child];
+    nodes_[static_cast<std::size_t>(heap_[i])].heap_pos = static_cast<std::int32_t>(i);
+    i = child;
+  }
+  heap_[i] = n;
+  nodes_[static_cast<std::size_t>(n)].heap_pos = static_cast<std::int32_t>(i);
+}
+
+void MinimalConstruct::heapPush(std::int32_t n) {
+  heap_.push_back(n);
+  heapUp(heap_.size() - 1);
+}
+
+void MinimalConstruct::heapDecrease(std::int32_t n) {
+  heapUp(static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].heap_pos));
+}
+
+std::int32_t MinimalConstruct::heapPop() {
+  const std::int32_t top = heap_.front();
+  heap_.front() = heap_.back();
+  heap_.pop_back();
+  if (!heap_.empty()) heapDown(0);
+  nodes_[static_cast<std::size_t>(top)].heap_pos = kNone;
+  return top;
+}
+
+}  // namespace staa

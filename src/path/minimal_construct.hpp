@@ -1,0 +1,148 @@
+#pragma once
+// Minimal Construct (Missura, Lee, Bennewitz, IROS 2018): the exact shortest path among
+// polygons by A* on a visibility graph that is built lazily.
+//
+// The search starts with only the start and the goal. Edges are assumed free until the node
+// they lead to is popped; only then is the edge checked against the obstacles. When a popped
+// edge runs through a polygon, that polygon's convex corners join the graph (connected to
+// every closed node), the edge is remembered as blocked, and the node is re-queued through
+// its best remaining parent: the search is repaired, not restarted. Edges that cannot be on
+// a shortest path are never generated: at a corner, a path must touch the polygon
+// tangentially and turn around it. The result is the exact shortest path: ignoring the
+// undiscovered polygons can only shorten paths, and the returned path is checked edge by edge
+// against all of them.
+//
+// Static obstacles (the inflated map M') are indexed once. Dynamic obstacles (the inflated
+// moving obstacles D') are replaced every cycle without allocating. Polygons discovered for
+// a goal stay discovered for later queries to the same goal.
+//
+// After construction a query allocates nothing, provided the dynamic obstacles stay within
+// the capacity given in the options. Not thread-safe: one instance per thread.
+
+#include "path/polygon_set.hpp"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace staa {
+
+class MinimalConstruct {
+ public:
+  struct Options {
+    double grid_cell_m = 1.0;                  // edge index cell for the static obstacles
+    std::size_t max_dynamic_polygons = 64;     // capacity for D'
+    std::size_t max_dynamic_vertices = 4096;
+  };
+
+  enum class Status : std::uint8_t {
+    kFound,         // path holds the shortest path
+    kNoPath,        // start and goal are in different free regions
+    kStartBlocked,  // no free point exists near the start (everything is covered)
+    kGoalBlocked,   // no free point exists near the goal
+  };
+
+  struct Result {
+    Status status = Status::kNoPath;
+    // Polyline from start to goal. When the start or goal lay inside an obstacle, the path
+    // runs from/to the nearest free point and the original point is added at that end.
+    std::span<const Vec2> path;
+    double length = 0.0;  // length of `path`
+    bool start_moved = false;
+    bool goal_moved = false;
+    std::uint32_t expansions = 0;        // nodes closed
+    std::uint32_t edge_checks = 0;       // edges checked against the obstacles
+    std::uint32_t discovered = 0;        // polygons whose corners are in the graph (incl. kept ones)
+  };
+
+  MinimalConstruct() = default;
+  explicit MinimalConstruct(const Options& options) : options_(options) {}
+
+  // Replaces the static obstacles (load time: allocates and sizes every workspace).
+  void setStaticObstacles(std::span<const Polygon> polygons);
+  // Replaces the dynamic obstacles; no allocation within Options' capacity. Each polygon
+  // beyond the capacity is dropped and counted in droppedDynamicPolygons().
+  void setDynamicObstacles(std::span<const PolygonView> polygons);
+  void clearDynamicObstacles();
+
+  const PolygonSet& staticObstacles() const { return static_; }
+  const PolygonSet& dynamicObstacles() const { return dynamic_; }
+  std::size_t droppedDynamicPolygons() const { return dropped_dynamic_; }
+
+  // Shortest path from start to goal among the static obstacles, plus the dynamic ones when
+  // `with_dynamic`. The returned span stays valid until the next query.
+  Result query(const Vec2& start, const Vec2& goal, bool with_dynamic);
+
+  // Is a point free (outside every obstacle's interior) / is a segment free?
+  bool pointFree(const Vec2& p, bool with_dynamic) const;
+  bool segmentFree(const Vec2& a, const Vec2& b, bool with_dynamic) const;
+  // The free point nearest to p among both obstacle sets; false if there is none.
+  bool nearestFreePoint(const Vec2& p, bool with_dynamic, Vec2& out) const;
+
+ private:
+  static constexpr std::int32_t kNone = -1;
+  enum : std::uint8_t { kUnseen = 0, kOpen = 1, kClosed = 2 };
+
+  struct Node {
+    Vec2 pos{0.0, 0.0};
+    // Global vertex id: static vertices first, then dynamic ones; kNone for start/goal.
+    std::int32_t vertex = kNone;
+    std::int32_t parent = kNone;
+    double g = 0.0;
+    double f = 0.0;
+    std::int32_t heap_pos = kNone;
+    std::uint8_t state = kUnseen;
+  };
+
+  // Corner geometry by global vertex id.
+  const Vec2& cornerPos(std::int32_t v) const;
+  const Vec2& cornerPrev(std::int32_t v) const;
+  const Vec2& cornerNext(std::int32_t v) const;
+
+  void resetSearch(const Vec2& goal, bool with_dynamic);
+  // Adds the polygon's free convex corners to the graph and connects them; polygons that
+  // cover one of its corners are discovered with it (they shape the free space there).
+  void discoverPolygon(std::uint32_t global_polygon, bool with_dynamic);
+  void discoverOne(std::uint32_t global_polygon, bool with_dynamic);
+  bool canFollow(std::int32_t from, std::int32_t to) const;
+  void relax(std::int32_t from, std::int32_t to);
+  void repairParent(std::int32_t node);
+  bool edgeKnownBlocked(std::int32_t a, std::int32_t b) const;
+  void markEdgeBlocked(std::int32_t a, std::int32_t b);
+
+  // Indexed binary min-heap on f (ties: larger g first), over node ids.
+  void heapPush(std::int32_t n);
+  void heapDecrease(std::int32_t n);
+  std::int32_t heapPop();
+  void heapUp(std::size_t i);
+  void heapDown(std::size_t i);
+  bool heapLess(std::int32_t a, std::int32_t b) const;
+
+  Options options_;
+  PolygonSet static_;
+  PolygonSet dynamic_;
+  std::size_t dropped_dynamic_ = 0;
+
+  // Search workspace, sized at setStaticObstacles / by the dynamic capacity.
+  std::vector<Node> nodes_;
+  std::vector<std::int32_t> heap_;
+  std::vector<std::int32_t> closed_;             // closed node ids in closing order
+  std::vector<std::uint8_t> static_discovered_;  // persists across queries to the same goal
+  std::vector<std::uint8_t> dynamic_discovered_;
+  std::vector<std::uint32_t> blockers_;
+  std::vector<std::uint32_t> pending_;   // polygons waiting to be discovered
+  std::vector<std::uint32_t> covering_;
+  std::vector<Vec2> path_;
+  // Open-addressing set of blocked (node, node) edges, cleared in O(1) by a generation stamp.
+  std::vector<std::uint64_t> blocked_keys_;
+  std::vector<std::uint32_t> blocked_gen_;
+  std::uint32_t blocked_generation_ = 1;
+  std::size_t blocked_count_ = 0;
+
+  Vec2 goal_pos_{0.0, 0.0};
+  bool have_goal_ = false;
+  std::uint32_t total_discovered_ = 0;
+  std::uint32_t edge_checks_ = 0;
+};
+
+}  // namespace staa

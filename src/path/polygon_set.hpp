@@ -1,0 +1,118 @@
+#pragma once
+// A set of obstacle polygons prepared for the queries that shortest-path search asks many
+// times: "does this segment pass through an obstacle's interior (and which)?", "is this
+// point free?", "where is the nearest free point?". Polygons are stored counter-clockwise
+// in one flat array; an optional uniform grid indexes edges and bounding boxes so that a
+// query touches only the polygons near it.
+//
+// Touching is free: a path may slide along an edge or turn at a corner; only the open
+// interior of a polygon blocks. Polygons may overlap.
+//
+// Building allocates; queries do not (callers pass fixed-capacity output spans).
+
+#include "geometry/types.hpp"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace staa {
+
+class PolygonSet {
+ public:
+  struct Options {
+    // Edge grid cell size in metres; 0 disables the grid (linear scans, for small sets).
+    double cell_size = 0.0;
+  };
+
+  PolygonSet() = default;
+
+  // Reserves room for `max_polygons` polygons with `max_vertices` vertices in total so that
+  // later assign() calls within that capacity do not allocate (used for D', rebuilt per cycle).
+  void reserve(std::size_t max_polygons, std::size_t max_vertices);
+
+  // Replaces the contents. Polygons with fewer than 3 vertices or zero area are skipped.
+  // Allocates only when the capacity is exceeded (or a grid is requested).
+  void assign(std::span<const PolygonView> polygons, const Options& options);
+  void assign(std::span<const Polygon> polygons, const Options& options);  // load time: allocates
+  void clear();
+
+  std::size_t polygonCount() const { return polys_.size(); }
+  std::size_t vertexCount() const { return vertices_.size(); }
+  PolygonView polygon(std::size_t i) const {
+    return {vertices_.data() + polys_[i].first, polys_[i].count};
+  }
+  const Box& polygonBox(std::size_t i) const { return polys_[i].box; }
+  // Index of the polygon that vertex v belongs to, and the vertex's neighbours (CCW order).
+  std::uint32_t polygonOfVertex(std::size_t v) const { return vertex_polygon_[v]; }
+  const Vec2& vertex(std::size_t v) const { return vertices_[v]; }
+  std::size_t prevVertex(std::size_t v) const;
+  std::size_t nextVertex(std::size_t v) const;
+  // A corner whose interior angle is below 180 degrees: the only corners a shortest path
+  // can turn at.
+  bool isConvexCorner(std::size_t v) const { return convex_[v] != 0; }
+
+  // True when the point lies strictly inside some polygon (boundary is free).
+  bool pointBlocked(const Vec2& p) const;
+  // As pointBlocked, but ignores polygon `skip` (a corner lies on its own polygon).
+  bool pointBlockedExcept(const Vec2& p, std::uint32_t skip) const;
+  // Writes the polygons (other than `skip`) that contain p strictly into `out`; returns how
+  // many were written (at most out.size()).
+  std::size_t coveringPolygons(const Vec2& p, std::uint32_t skip, std::span<std::uint32_t> out) const;
+
+  // True when the closed segment [a, b] passes through the interior of some polygon.
+  bool segmentBlocked(const Vec2& a, const Vec2& b) const;
+  // Writes the indices of all polygons whose interior the segment enters into `out`
+  // (at most out.size(); extra blockers are dropped) and returns their number. A polygon
+  // is listed once.
+  std::size_t segmentBlockers(const Vec2& a, const Vec2& b, std::span<std::uint32_t> out) const;
+
+  // Distance from p to the nearest polygon edge (inside or outside); infinity when empty.
+  double distanceToNearestEdge(const Vec2& p) const;
+
+  // The free point nearest to p (p itself when free): the closest point on any polygon's
+  // boundary that is not inside another polygon, nudged outwards by `nudge` metres.
+  // Returns false when there is no free point (everything is covered).
+  bool nearestFreePoint(const Vec2& p, Vec2& out, double nudge = 1e-6) const;
+
+ private:
+  struct PolyRec {
+    std::uint32_t first = 0;
+    std::uint32_t count = 0;
+    Box box;
+  };
+
+  // Does the segment enter the interior of polygon `k` through the boundary near edge
+  // starting at vertex c? (the per-edge part of the exact test, see polygon_set.cpp).
+  bool edgeBlocks(const Vec2& a, const Vec2& b, std::size_t c) const;
+
+  template <typename Visitor>
+  bool forEachEdgeNearSegment(const Vec2& a, const Vec2& b, Visitor&& visit) const;
+  template <typename Visitor>
+  bool forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const;
+
+  void buildGrid(double cell_size);
+
+  std::vector<Vec2> vertices_;
+  std::vector<std::uint32_t> vertex_polygon_;
+  std::vector<std::uint8_t> convex_;
+  std::vector<PolyRec> polys_;
+
+  // Uniform grid over the set's extent: per cell, the edges (by start vertex) that overlap
+  // the cell's box and the polygons whose box overlaps it. CSR layout (offsets + items).
+  bool has_grid_ = false;
+  double cell_ = 1.0;
+  Vec2 grid_origin_{0.0, 0.0};
+  int grid_w_ = 0;
+  int grid_h_ = 0;
+  std::vector<std::uint32_t> cell_edge_offsets_;
+  std::vector<std::uint32_t> cell_edges_;
+  std::vector<std::uint32_t> cell_poly_offsets_;
+  std::vector<std::uint32_t> cell_polys_;
+  // Per-query visit stamps so that an edge or polygon listed in several cells is tested once.
+  mutable std::vector<std::uint32_t> edge_stamp_;
+  mutable std::vector<std::uint32_t> poly_stamp_;
+  mutable std::uint32_t stamp_ = 0;
+};
+
+}  // namespace staa

@@ -1,0 +1,85 @@
+#include "path/global_path.hpp"
+
+#include "visibility_reference.hpp"
+
+#include <gtest/gtest.h>
+
+namespace staa {
+namespace {
+
+// Two rooms side by side, 4 x 4 m each, a 1.2 m door in the wall between them (x = 4).
+PolygonMap twoRooms() {
+  PolygonMap m;
+  m.name = "two-rooms";
+  m.bounds = Box{{0, 0}, {8, 4}};
+  m.obstacles = {{{3.9, 0}, {4.1, 0}, {4.1, 1.4}, {3.9, 1.4}}, {{3.9, 2.6}, {4.1, 2.6}, {4.1, 4}, {3.9, 4}}};
+  return m;
+}
+
+TEST(GlobalPath, GoesThroughTheDoorAndStaysInsideTheBounds) {
+  GlobalPathOptions opt;
+  opt.inflation_radius_m = 0.3;
+  GlobalPathPlanner planner(twoRooms(), opt);
+  const GlobalPath p = planner.plan({1, 0.5}, {7, 0.5});
+  ASSERT_EQ(p.status, PathStatus::kFound);
+  // Down the door's inflated jambs at y = 1.4 + 0.3 = 1.7 and... the path climbs to the door.
+  double max_y = 0.0;
+  for (const Vec2& q : p.path) {
+    EXPECT_GE(q.x(), 0.3 - 1e-6);
+    EXPECT_LE(q.x(), 7.7 + 1e-6);
+    EXPECT_GE(q.y(), 0.3 - 1e-6);
+    max_y = std::max(max_y, q.y());
+  }
+  EXPECT_GT(max_y, 1.65);  // around the lower jamb's inflated corner (1.4 + 0.3, rounded)
+  EXPECT_LT(max_y, 1.71);
+  EXPECT_FALSE(p.dynamic);
+}
+
+TEST(GlobalPath, DoorNarrowerThanTheRobotIsNoPath) {
+  GlobalPathOptions opt;
+  opt.inflation_radius_m = 0.65;  // 1.2 m door < 2 * 0.65
+  GlobalPathPlanner planner(twoRooms(), opt);
+  EXPECT_EQ(planner.plan({1, 2}, {7, 2}).status, PathStatus::kNoPath);
+}
+
+TEST(GlobalPath, GoalInsideARealObstacleIsAnErrorGoalNearAWallIsMoved) {
+  GlobalPathPlanner planner(twoRooms(), GlobalPathOptions{});
+  EXPECT_EQ(planner.plan({1, 2}, {4.0, 0.5}).status, PathStatus::kGoalInObstacle);
+  EXPECT_EQ(planner.plan({1, 2}, {9.0, 2.0}).status, PathStatus::kGoalInObstacle);  // outside the bounds
+  const GlobalPath p = planner.plan({1, 2}, {7.9, 2.0});  // 0.1 m from the east wall
+  ASSERT_EQ(p.status, PathStatus::kFound);
+  EXPECT_TRUE(p.goal_moved);
+  EXPECT_EQ(p.path.back(), Vec2(7.9, 2.0));
+  EXPECT_NEAR(p.path[p.path.size() - 2].x(), 8.0 - 0.3, 0.02);
+}
+
+TEST(GlobalPath, PersonInTheDoorFallsBackToTheStaticPath) {
+  GlobalPathPlanner planner(twoRooms(), GlobalPathOptions{});
+  // An inflated person filling the door.
+  const Polygon person{{3.5, 1.2}, {4.5, 1.2}, {4.5, 2.8}, {3.5, 2.8}};
+  const PolygonView view(person);
+  const GlobalPath p = planner.plan({1, 2}, {7, 2}, std::span<const PolygonView>(&view, 1));
+  ASSERT_EQ(p.status, PathStatus::kFound);
+  EXPECT_FALSE(p.dynamic);
+  EXPECT_NEAR(p.length, 6.0, 1e-9);  // straight through the door, as if the person were not there
+  // A person beside the path is avoided by the dynamic path.
+  const Polygon aside{{1.8, 1.8}, {2.2, 1.8}, {2.2, 2.2}, {1.8, 2.2}};
+  const PolygonView v2(aside);
+  const GlobalPath q = planner.plan({1, 2}, {7, 2}, std::span<const PolygonView>(&v2, 1));
+  ASSERT_EQ(q.status, PathStatus::kFound);
+  EXPECT_TRUE(q.dynamic);
+  EXPECT_GT(q.length, 6.0);
+}
+
+TEST(GlobalPath, BoundsWallsEncloseTheBox) {
+  const auto walls = boundsWalls(Box{{0, 0}, {2, 1}}, 1.0);
+  ASSERT_EQ(walls.size(), 4u);
+  EXPECT_TRUE(test::referencePointFree({1, 0.5}, walls));
+  EXPECT_FALSE(test::referencePointFree({-0.5, 0.5}, walls));
+  EXPECT_FALSE(test::referencePointFree({2.5, 0.5}, walls));
+  EXPECT_FALSE(test::referencePointFree({1, -0.5}, walls));
+  EXPECT_FALSE(test::referencePointFree({1, 1.5}, walls));
+}
+
+}  // namespace
+}  // namespace staa
