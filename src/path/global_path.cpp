@@ -35,7 +35,8 @@ GlobalPathPlanner::GlobalPathPlanner(const PolygonMap& map, const GlobalPathOpti
     real_.insert(real_.end(), walls.begin(), walls.end());
   }
   inflated_ = options.inflation_radius_m > 0.0
-                  ? inflateEachToSimple(real_, options.inflation_radius_m, options.arc_tolerance_m)
+                  ? inflateEachToSimple(real_, options.inflation_radius_m + options.arc_tolerance_m,
+                                        options.arc_tolerance_m)
                   : real_;
   real_set_.assign(std::span<const Polygon>(real_), PolygonSet::Options{options.search.grid_cell_m});
   search_.setStaticObstacles(inflated_);

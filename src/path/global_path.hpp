@@ -14,7 +14,10 @@ namespace staa {
 
 struct GlobalPathOptions {
   double inflation_radius_m = 0.3;  // at least the robot's radius
-  double arc_tolerance_m = 0.01;    // chord error of the inflated round corners
+  // Chord error allowed on the inflated round corners. The polygons are grown by the radius
+  // plus this tolerance, so that they contain the exact inflated shape (chords lie inside an
+  // arc). Coarser is faster (fewer corners): 3 cm keeps a 90-degree corner to 3 vertices.
+  double arc_tolerance_m = 0.03;
   MinimalConstruct::Options search;
 };
 

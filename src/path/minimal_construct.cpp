@@ -43,7 +43,9 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   static_discovered_.assign(static_.polygonCount(), 0);
   dynamic_discovered_.assign(options_.max_dynamic_polygons, 0);
   const std::size_t max_nodes = static_.vertexCount() + options_.max_dynamic_vertices + 2;
-  nodes_.reserve(max_nodes);
+  // Each query to a kept search tree adds one start node; the slack lets a tree live for
+  // kTreeSlack queries before it is rebuilt (which a query does when the slack runs out).
+  nodes_.reserve(max_nodes + kTreeSlack);
   heap_.reserve(max_nodes);
   closed_.reserve(max_nodes);
   path_.reserve(max_nodes + 2);
@@ -57,6 +59,17 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   blocked_gen_.assign(slots, 0);
   blocked_generation_ = 1;
   have_goal_ = false;
+  tree_valid_ = false;
+  // Which static polygons cover each static corner never changes: find out once.
+  static_cover_offsets_.assign(static_.vertexCount() + 1, 0);
+  static_cover_.clear();
+  for (std::size_t v = 0; v < static_.vertexCount(); ++v) {
+    if (static_.isConvexCorner(v)) {
+      const std::size_t n = static_.coveringPolygons(static_.vertex(v), static_.polygonOfVertex(v), covering_);
+      static_cover_.insert(static_cover_.end(), covering_.begin(), covering_.begin() + static_cast<std::ptrdiff_t>(n));
+    }
+    static_cover_offsets_[v + 1] = static_cast<std::uint32_t>(static_cover_.size());
+  }
   total_discovered_ = 0;
 }
 
@@ -75,25 +88,6 @@ void MinimalConstruct::setDynamicObstacles(std::span<const PolygonView> polygons
 void MinimalConstruct::clearDynamicObstacles() {
   dynamic_.clear();
   dropped_dynamic_ = 0;
-}
-
-const Vec2& MinimalConstruct::cornerPos(std::int32_t v) const {
-  const auto sv = static_cast<std::size_t>(v);
-  return sv < static_.vertexCount() ? static_.vertex(sv) : dynamic_.vertex(sv - static_.vertexCount());
-}
-
-const Vec2& MinimalConstruct::cornerPrev(std::int32_t v) const {
-  const auto sv = static_cast<std::size_t>(v);
-  if (sv < static_.vertexCount()) return static_.vertex(static_.prevVertex(sv));
-  const std::size_t d = sv - static_.vertexCount();
-  return dynamic_.vertex(dynamic_.prevVertex(d));
-}
-
-const Vec2& MinimalConstruct::cornerNext(std::int32_t v) const {
-  const auto sv = static_cast<std::size_t>(v);
-  if (sv < static_.vertexCount()) return static_.vertex(static_.nextVertex(sv));
-  const std::size_t d = sv - static_.vertexCount();
-  return dynamic_.vertex(dynamic_.nextVertex(d));
 }
 
 bool MinimalConstruct::pointFree(const Vec2& p, bool with_dynamic) const {
@@ -157,6 +151,7 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
     goal_pos_ = goal;
     have_goal_ = true;
   }
+  tree_valid_ = false;
   std::fill(dynamic_discovered_.begin(), dynamic_discovered_.end(), 0);
   nodes_.clear();
   heap_.clear();
@@ -167,8 +162,7 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   }
   blocked_count_ = 0;
   total_discovered_ = 0;
-  nodes_.push_back(Node{});  // 0: start
-  nodes_.push_back(Node{});  // 1: goal
+  nodes_.push_back(Node{});  // 0: the goal, root of the backward search
   for (std::size_t k = 0; k < static_discovered_.size(); ++k) {
     if (static_discovered_[k]) {
       static_discovered_[k] = 0;  // discoverPolygon sets it again and adds the corners
@@ -208,13 +202,20 @@ void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynam
     // A corner inside another polygon is not a node, but that polygon bounds the free space
     // right here, so it joins the graph too: without it, the way around both is missing.
     bool covered = false;
-    std::size_t n = static_.coveringPolygons(p, is_static ? local : kNoPolygon, covering_);
-    for (std::size_t j = 0; j < n; ++j) {
-      covered = true;
-      if (!static_discovered_[covering_[j]]) pending_.push_back(covering_[j]);
+    if (is_static) {
+      for (std::uint32_t j = static_cover_offsets_[v]; j < static_cover_offsets_[v + 1]; ++j) {
+        covered = true;
+        if (!static_discovered_[static_cover_[j]]) pending_.push_back(static_cover_[j]);
+      }
+    } else {
+      const std::size_t n = static_.coveringPolygons(p, kNoPolygon, covering_);
+      for (std::size_t j = 0; j < n; ++j) {
+        covered = true;
+        if (!static_discovered_[covering_[j]]) pending_.push_back(covering_[j]);
+      }
     }
     if (with_dynamic) {
-      n = dynamic_.coveringPolygons(p, is_static ? kNoPolygon : local, covering_);
+      const std::size_t n = dynamic_.coveringPolygons(p, is_static ? kNoPolygon : local, covering_);
       for (std::size_t j = 0; j < n; ++j) {
         covered = true;
         if (!dynamic_discovered_[covering_[j]]) pending_.push_back(covering_[j] + ns_poly);
@@ -223,6 +224,8 @@ void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynam
     if (covered) continue;
     Node node;
     node.pos = p;
+    node.prev = set.vertex(set.prevVertex(v));
+    node.next = set.vertex(set.nextVertex(v));
     node.vertex = static_cast<std::int32_t>(v + offset);
     nodes_.push_back(node);
   }
@@ -236,20 +239,14 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
   const Node& a = nodes_[static_cast<std::size_t>(from)];
   const Node& b = nodes_[static_cast<std::size_t>(to)];
   if (a.vertex != kNone) {
-    const Vec2& prev = cornerPrev(a.vertex);
-    const Vec2& next = cornerNext(a.vertex);
-    if (!tangentAt(a.pos, b.pos, prev, next)) return false;
+    if (!tangentAt(a.pos, b.pos, a.prev, a.next)) return false;
     // The path must turn around the corner, towards the side the polygon lies on.
-    if (a.parent != kNone) {
-      const Vec2& u = nodes_[static_cast<std::size_t>(a.parent)].pos;
-      int side = sgn(orient(u, a.pos, prev));
-      if (side == 0) side = sgn(orient(u, a.pos, next));
-      const int turn = sgn(orient(u, a.pos, b.pos));
-      if (turn != 0 && turn != side) return false;
+    if (a.turn != 0) {
+      const int turn = sgn(orient(nodes_[static_cast<std::size_t>(a.parent)].pos, a.pos, b.pos));
+      if (turn != 0 && turn != a.turn) return false;
     }
   }
-  if (b.vertex != kNone && !tangentAt(b.pos, a.pos, cornerPrev(b.vertex), cornerNext(b.vertex))) return false;
-  return true;
+  return b.vertex == kNone || tangentAt(b.pos, a.pos, b.prev, b.next);
 }
 
 void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
@@ -260,7 +257,7 @@ void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
   if (b.state == kOpen && g >= b.g) return;
   if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return;
   b.g = g;
-  b.f = g + (goal_pos_ - b.pos).norm();
+  b.f = g + (target_pos_ - b.pos).norm();
   b.parent = from;
   if (b.state == kOpen) {
     heapDecrease(to);
@@ -315,6 +312,15 @@ void MinimalConstruct::markEdgeBlocked(std::int32_t a, std::int32_t b) {
   }
 }
 
+std::int32_t MinimalConstruct::addTargetNode(const Vec2& start) {
+  Node node;
+  node.pos = start;
+  node.g = kInf;
+  nodes_.push_back(node);
+  target_pos_ = start;
+  return static_cast<std::int32_t>(nodes_.size() - 1);
+}
+
 MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec2& goal_in, bool with_dynamic) {
   Result result;
   path_.clear();
@@ -333,15 +339,36 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
   result.start_moved = start != start_in;
   result.goal_moved = goal != goal_in;
 
-  resetSearch(goal, use_dynamic);
-  Node& s = nodes_[0];
-  s.pos = start;
-  s.g = 0.0;
-  s.f = (goal - start).norm();
-  s.state = kOpen;
-  nodes_[1].pos = goal;
-  nodes_[1].g = kInf;
-  heapPush(0);
+  // The search runs backwards, from the goal (the root, node 0) to the start. Closed nodes
+  // then carry exact distances to the goal, which stay true while the goal and the obstacles
+  // stay: the next query to the same goal only swaps the start and resumes the search.
+  const bool persistent = !use_dynamic;
+  const bool reuse = persistent && tree_valid_ && goal == tree_goal_ && nodes_.size() < nodes_.capacity();
+  if (reuse) {
+    // Retire the previous start: it was never expanded, so nothing hangs below it.
+    Node& old = nodes_[static_cast<std::size_t>(target_)];
+    if (!closed_.empty() && closed_.back() == target_) closed_.pop_back();
+    old.state = kClosed;  // never relaxed again
+    target_ = addTargetNode(start);
+    for (const std::int32_t c : closed_) relax(c, target_);
+    // Re-key the open list for the new start (the heuristic changed) and restore the heap.
+    for (const std::int32_t n : heap_) {
+      Node& node = nodes_[static_cast<std::size_t>(n)];
+      node.f = node.g + (target_pos_ - node.pos).norm();
+    }
+    for (std::size_t i = heap_.size() / 2; i-- > 0;) heapDown(i);
+  } else {
+    resetSearch(goal, use_dynamic);
+    target_ = addTargetNode(start);
+    Node& root = nodes_[0];
+    root.pos = goal;
+    root.g = 0.0;
+    root.f = (start - goal).norm();
+    root.state = kOpen;
+    heapPush(0);
+    tree_valid_ = persistent;
+    tree_goal_ = goal;
+  }
 
   const std::size_t ns_poly = static_.polygonCount();
   bool found = false;
@@ -367,13 +394,19 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
       }
     }
     node.state = kClosed;
+    if (node.vertex != kNone && node.parent != kNone) {
+      const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
+      int side = sgn(orient(u, node.pos, node.prev));
+      if (side == 0) side = sgn(orient(u, node.pos, node.next));
+      node.turn = static_cast<std::int8_t>(side);
+    }
     closed_.push_back(v);
     ++result.expansions;
-    if (v == 1) {
+    if (v == target_) {
       found = true;
       break;
     }
-    for (std::size_t w = 1; w < nodes_.size(); ++w) relax(v, static_cast<std::int32_t>(w));
+    for (std::size_t w = 0; w < nodes_.size(); ++w) relax(v, static_cast<std::int32_t>(w));
   }
   result.edge_checks = edge_checks_;
   result.discovered = total_discovered_;
@@ -382,13 +415,12 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     return result;
   }
 
-  // Walk the parents back from the goal, then reverse in place.
-  if (result.goal_moved) path_.push_back(goal_in);
-  for (std::int32_t n = 1; n != kNone; n = nodes_[static_cast<std::size_t>(n)].parent) {
+  // Parents lead from the start to the goal: the path comes out in driving order.
+  if (result.start_moved) path_.push_back(start_in);
+  for (std::int32_t n = target_; n != kNone; n = nodes_[static_cast<std::size_t>(n)].parent) {
     path_.push_back(nodes_[static_cast<std::size_t>(n)].pos);
   }
-  if (result.start_moved) path_.push_back(start_in);
-  std::reverse(path_.begin(), path_.end());
+  if (result.goal_moved) path_.push_back(goal_in);
   double length = 0.0;
   for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
   result.status = Status::kFound;

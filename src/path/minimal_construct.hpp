@@ -12,9 +12,13 @@
 // undiscovered polygons can only shorten paths, and the returned path is checked edge by edge
 // against all of them.
 //
+// The search runs backwards from the goal, so its closed nodes hold exact distances to the
+// goal. Static queries to the same goal keep the whole search tree: the next query (the
+// robot a few centimetres further) only connects the new start and resumes. Queries with
+// dynamic obstacles start afresh but keep the static polygons discovered for that goal.
+//
 // Static obstacles (the inflated map M') are indexed once. Dynamic obstacles (the inflated
-// moving obstacles D') are replaced every cycle without allocating. Polygons discovered for
-// a goal stay discovered for later queries to the same goal.
+// moving obstacles D') are replaced every cycle without allocating.
 //
 // After construction a query allocates nothing, provided the dynamic obstacles stay within
 // the capacity given in the options. Not thread-safe: one instance per thread.
@@ -81,10 +85,15 @@ class MinimalConstruct {
 
  private:
   static constexpr std::int32_t kNone = -1;
+  static constexpr std::size_t kTreeSlack = 4096;
   enum : std::uint8_t { kUnseen = 0, kOpen = 1, kClosed = 2 };
 
   struct Node {
     Vec2 pos{0.0, 0.0};
+    // The corner's neighbours on its polygon (for the tangency tests), copied in so that the
+    // inner loop of the search touches one array only.
+    Vec2 prev{0.0, 0.0};
+    Vec2 next{0.0, 0.0};
     // Global vertex id: static vertices first, then dynamic ones; kNone for start/goal.
     std::int32_t vertex = kNone;
     std::int32_t parent = kNone;
@@ -92,14 +101,14 @@ class MinimalConstruct {
     double f = 0.0;
     std::int32_t heap_pos = kNone;
     std::uint8_t state = kUnseen;
+    // Set when closed: the side (+1 left, -1 right) the polygon lies on, seen along the edge
+    // from the parent; successors must turn that way. 0: no constraint.
+    std::int8_t turn = 0;
   };
 
-  // Corner geometry by global vertex id.
-  const Vec2& cornerPos(std::int32_t v) const;
-  const Vec2& cornerPrev(std::int32_t v) const;
-  const Vec2& cornerNext(std::int32_t v) const;
 
   void resetSearch(const Vec2& goal, bool with_dynamic);
+  std::int32_t addTargetNode(const Vec2& start);
   // Adds the polygon's free convex corners to the graph and connects them; polygons that
   // cover one of its corners are discovered with it (they shape the free space there).
   void discoverPolygon(std::uint32_t global_polygon, bool with_dynamic);
@@ -132,6 +141,9 @@ class MinimalConstruct {
   std::vector<std::uint32_t> blockers_;
   std::vector<std::uint32_t> pending_;   // polygons waiting to be discovered
   std::vector<std::uint32_t> covering_;
+  // Per static vertex: the other static polygons that contain it (CSR), computed once.
+  std::vector<std::uint32_t> static_cover_offsets_;
+  std::vector<std::uint32_t> static_cover_;
   std::vector<Vec2> path_;
   // Open-addressing set of blocked (node, node) edges, cleared in O(1) by a generation stamp.
   std::vector<std::uint64_t> blocked_keys_;
@@ -139,8 +151,12 @@ class MinimalConstruct {
   std::uint32_t blocked_generation_ = 1;
   std::size_t blocked_count_ = 0;
 
-  Vec2 goal_pos_{0.0, 0.0};
+  Vec2 goal_pos_{0.0, 0.0};   // the goal whose discovered polygons are kept
   bool have_goal_ = false;
+  Vec2 target_pos_{0.0, 0.0};  // the start: the backward search's target, its heuristic's anchor
+  std::int32_t target_ = kNone;
+  bool tree_valid_ = false;    // the search tree may be resumed for tree_goal_
+  Vec2 tree_goal_{0.0, 0.0};
   std::uint32_t total_discovered_ = 0;
   std::uint32_t edge_checks_ = 0;
 };

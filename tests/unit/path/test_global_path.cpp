@@ -22,7 +22,8 @@ TEST(GlobalPath, GoesThroughTheDoorAndStaysInsideTheBounds) {
   GlobalPathPlanner planner(twoRooms(), opt);
   const GlobalPath p = planner.plan({1, 0.5}, {7, 0.5});
   ASSERT_EQ(p.status, PathStatus::kFound);
-  // Down the door's inflated jambs at y = 1.4 + 0.3 = 1.7 and... the path climbs to the door.
+  // The path climbs to the door and passes the lower jamb's inflated corner at
+  // y = 1.4 + 0.3 (+ up to the 3 cm arc tolerance).
   double max_y = 0.0;
   for (const Vec2& q : p.path) {
     EXPECT_GE(q.x(), 0.3 - 1e-6);
@@ -30,8 +31,8 @@ TEST(GlobalPath, GoesThroughTheDoorAndStaysInsideTheBounds) {
     EXPECT_GE(q.y(), 0.3 - 1e-6);
     max_y = std::max(max_y, q.y());
   }
-  EXPECT_GT(max_y, 1.65);  // around the lower jamb's inflated corner (1.4 + 0.3, rounded)
-  EXPECT_LT(max_y, 1.71);
+  EXPECT_GE(max_y, 1.70);
+  EXPECT_LE(max_y, 1.73 + 1e-9);
   EXPECT_FALSE(p.dynamic);
 }
 
@@ -50,7 +51,7 @@ TEST(GlobalPath, GoalInsideARealObstacleIsAnErrorGoalNearAWallIsMoved) {
   ASSERT_EQ(p.status, PathStatus::kFound);
   EXPECT_TRUE(p.goal_moved);
   EXPECT_EQ(p.path.back(), Vec2(7.9, 2.0));
-  EXPECT_NEAR(p.path[p.path.size() - 2].x(), 8.0 - 0.3, 0.02);
+  EXPECT_NEAR(p.path[p.path.size() - 2].x(), 8.0 - 0.3, 0.04);
 }
 
 TEST(GlobalPath, PersonInTheDoorFallsBackToTheStaticPath) {
