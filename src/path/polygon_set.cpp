@@ -30,6 +30,24 @@ bool withinBox(const Vec2& p, const Vec2& a, const Vec2& b) {
          std::min(a.y(), b.y()) <= p.y() && p.y() <= std::max(a.y(), b.y());
 }
 
+// Strict containment with no tolerance, so that it agrees exactly with the segment test
+// below: a point a rounding error inside counts as inside (and gets moved out by the
+// planner) instead of as "on the boundary", where every segment leaving it would be blocked.
+bool strictlyInside(const Vec2& p, PolygonView poly) {
+  bool inside = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Vec2& a = poly[j];
+    const Vec2& b = poly[i];
+    if (orient(a, b, p) == 0.0 && withinBox(p, a, b)) return false;  // exactly on the boundary
+    if ((a.y() > p.y()) != (b.y() > p.y())) {
+      // Which side of the edge p is on, decided by the sign of an orientation (no division).
+      const double o = orient(a, b, p);
+      if ((b.y() > a.y()) == (o > 0.0)) inside = !inside;
+    }
+  }
+  return inside;
+}
+
 }  // namespace
 
 void PolygonSet::reserve(std::size_t max_polygons, std::size_t max_vertices) {
@@ -275,18 +293,18 @@ std::size_t PolygonSet::segmentBlockers(const Vec2& a, const Vec2& b, std::span<
 }
 
 bool PolygonSet::pointBlocked(const Vec2& p) const {
-  return forEachPolygonNearPoint(p, [&](std::uint32_t k) { return locatePoint(p, polygon(k)) == Containment::kInside; });
+  return forEachPolygonNearPoint(p, [&](std::uint32_t k) { return strictlyInside(p, polygon(k)); });
 }
 
 bool PolygonSet::pointBlockedExcept(const Vec2& p, std::uint32_t skip) const {
   return forEachPolygonNearPoint(
-      p, [&](std::uint32_t k) { return k != skip && locatePoint(p, polygon(k)) == Containment::kInside; });
+      p, [&](std::uint32_t k) { return k != skip && strictlyInside(p, polygon(k)); });
 }
 
 std::size_t PolygonSet::coveringPolygons(const Vec2& p, std::uint32_t skip, std::span<std::uint32_t> out) const {
   std::size_t n = 0;
   forEachPolygonNearPoint(p, [&](std::uint32_t k) {
-    if (k != skip && n < out.size() && locatePoint(p, polygon(k)) == Containment::kInside) out[n++] = k;
+    if (k != skip && n < out.size() && strictlyInside(p, polygon(k))) out[n++] = k;
     return false;
   });
   return n;
