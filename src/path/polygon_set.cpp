@@ -13,16 +13,18 @@ namespace {
 // Grids beyond this many cells cost more memory than they save time; the cell grows instead.
 constexpr double kMaxGridCells = 1 << 20;
 
-// Is direction x strictly inside the interior angle of a counter-clockwise polygon at a
-// vertex whose incoming edge direction is e1 and outgoing e2?
-bool entersInterior(const Vec2& e1, const Vec2& e2, const Vec2& x) {
-  const double turn = cross(e1, e2);
-  const double l1 = cross(e1, x);
-  const double l2 = cross(e2, x);
+// Does the way from vertex c towards point t start strictly inside the interior angle at c
+// of a counter-clockwise polygon (prev -> c -> next)? Written with orientations of the
+// points themselves, not of difference vectors, so that it rounds the same way as the other
+// tests here (a point exactly on an edge's line must not also be "a hair to its left").
+bool entersInterior(const Vec2& prev, const Vec2& c, const Vec2& next, const Vec2& t) {
+  const double turn = orient(prev, c, next);
+  const double l1 = orient(prev, c, t);
+  const double l2 = orient(c, next, t);
   if (turn > 0.0) return l1 > 0.0 && l2 > 0.0;  // convex corner: the cone between the edges
   if (turn < 0.0) return l1 > 0.0 || l2 > 0.0;  // reflex corner: everything but the outside cone
   // Straight-through vertex (collinear edges) or a spike: left of the outgoing edge.
-  return e1.dot(e2) > 0.0 ? l2 > 0.0 : false;
+  return (c - prev).dot(next - c) > 0.0 ? l2 > 0.0 : false;
 }
 
 bool withinBox(const Vec2& p, const Vec2& a, const Vec2& b) {
@@ -249,7 +251,7 @@ bool PolygonSet::forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const {
 // planners guarantee that by moving such points out first):
 //  - the segment crosses the edge at a point interior to both; or
 //  - the segment passes through vertex c heading into the interior angle at c; or
-//  - an end of the segment lies inside the edge and the segment leaves it to the left.
+//  - an end of the segment lies inside the edge and the other end lies left of it.
 // Any first entry into the interior happens at one of these, so no containment test of a
 // sample point is needed.
 bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci) const {
@@ -262,15 +264,14 @@ bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci) const 
   if (((oc > 0.0 && od < 0.0) || (oc < 0.0 && od > 0.0)) && ((oa > 0.0 && ob < 0.0) || (oa < 0.0 && ob > 0.0))) {
     return true;
   }
-  const Vec2 ab = b - a;
-  if (oc == 0.0 && withinBox(c, a, b) && ab.squaredNorm() > 0.0) {
+  if (oc == 0.0 && a != b && withinBox(c, a, b)) {
     const Vec2& p = vertices_[prevVertex(ci)];
-    const Vec2 e1 = c - p, e2 = d - c;
-    if (c != b && entersInterior(e1, e2, ab)) return true;
-    if (c != a && entersInterior(e1, e2, -ab)) return true;
+    if (c != b && entersInterior(p, c, d, b)) return true;
+    if (c != a && entersInterior(p, c, d, a)) return true;
   }
-  if (oa == 0.0 && a != c && a != d && withinBox(a, c, d) && cross(d - c, ab) > 0.0) return true;
-  if (ob == 0.0 && b != c && b != d && withinBox(b, c, d) && cross(d - c, -ab) > 0.0) return true;
+  // An end on the edge: the segment enters when its other end lies left of the edge.
+  if (oa == 0.0 && a != c && a != d && withinBox(a, c, d) && ob > 0.0) return true;
+  if (ob == 0.0 && b != c && b != d && withinBox(b, c, d) && oa > 0.0) return true;
   return false;
 }
 

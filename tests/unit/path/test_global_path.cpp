@@ -1,6 +1,10 @@
 #include "path/global_path.hpp"
 
 #include "map/generate.hpp"
+#include "map/ros_import.hpp"
+#include "shared_dir.hpp"
+
+#include <random>
 
 #include "visibility_reference.hpp"
 
@@ -102,6 +106,44 @@ TEST(GlobalPath, FindsThePathFromEveryPointAlongItAcrossTheOffice) {
     travelled += len;
   }
   EXPECT_GT(queries, 500);
+}
+
+// The same on a real map: a robot following paths across the imported warehouse, with its
+// thousands of short, nearly collinear edges. Regression: a start exactly on an edge's line
+// once counted as "a hair to the left" of it in one test and "on it" in another.
+TEST(GlobalPath, FindsThePathFromEveryPointAlongItAcrossTheWarehouse) {
+  const auto yaml = test::sharedDir() / "maps/ros/warehouse.yaml";
+  STAA_REQUIRE_SHARED_FILE(yaml);
+  const PolygonMap map = importRosMap(yaml, ImportOptions{});
+  GlobalPathPlanner planner(map, GlobalPathOptions{});
+  std::vector<Vec2> free_points;
+  const Box b = *map.bounds;
+  for (double x = b.min.x() + 0.5; x < b.max.x(); x += 1.0) {
+    for (double y = b.min.y() + 0.5; y < b.max.y(); y += 1.0) {
+      const GlobalPath p = planner.plan({x, y}, {x, y});
+      if (!planner.insideRealObstacle({x, y}) && p.status == PathStatus::kFound && !p.start_moved) free_points.push_back({x, y});
+    }
+  }
+  ASSERT_GT(free_points.size(), 300u);
+  std::mt19937_64 rng(2);
+  int trips = 0, queries = 0;
+  const double far = 0.5 * std::hypot(b.width(), b.height());
+  while (trips < 16) {
+    const Vec2 a = free_points[rng() % free_points.size()], goal = free_points[rng() % free_points.size()];
+    if ((a - goal).norm() < far) continue;
+    ++trips;
+    const GlobalPath first = planner.plan(a, goal);
+    ASSERT_EQ(first.status, PathStatus::kFound);
+    const std::vector<Vec2> path(first.path.begin(), first.path.end());
+    for (std::size_t k = 0; k + 1 < path.size(); ++k) {
+      const double len = (path[k + 1] - path[k]).norm();
+      for (double t = 0.0; t < len; t += 0.05, ++queries) {
+        const Vec2 p = path[k] + (path[k + 1] - path[k]) * (t / len);
+        ASSERT_EQ(planner.plan(p, goal).status, PathStatus::kFound) << "at " << p.transpose() << " to " << goal.transpose();
+      }
+    }
+  }
+  EXPECT_GT(queries, 5000);
 }
 
 TEST(GlobalPath, BoundsWallsEncloseTheBox) {
