@@ -267,6 +267,43 @@ void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
   }
 }
 
+void MinimalConstruct::expand(std::int32_t v) {
+  // relax(v, w) for every node, with v's data hoisted and the cheap rejections first: most
+  // candidates fail a tangency test, so the distance (a square root) is computed for few.
+  const Node& a = nodes_[static_cast<std::size_t>(v)];
+  const Vec2 pa = a.pos, prev = a.prev, next = a.next;
+  const bool corner = a.vertex != kNone;
+  const int turn = a.turn;
+  const Vec2 pu = turn != 0 ? nodes_[static_cast<std::size_t>(a.parent)].pos : pa;
+  const double ga = a.g;
+  const std::size_t n = nodes_.size();
+  for (std::size_t w = 0; w < n; ++w) {
+    Node& b = nodes_[w];
+    if (b.state == kClosed) continue;
+    if (corner) {
+      if (!tangentAt(pa, b.pos, prev, next)) continue;
+      if (turn != 0) {
+        const int t = sgn(orient(pu, pa, b.pos));
+        if (t != 0 && t != turn) continue;
+      }
+    }
+    if (b.vertex != kNone && !tangentAt(b.pos, pa, b.prev, b.next)) continue;
+    const double g = ga + (b.pos - pa).norm();
+    if (b.state == kOpen && g >= b.g) continue;
+    const auto to = static_cast<std::int32_t>(w);
+    if (edgeKnownBlocked(v, to)) continue;
+    b.g = g;
+    b.f = g + (target_pos_ - b.pos).norm();
+    b.parent = v;
+    if (b.state == kOpen) {
+      heapDecrease(to);
+    } else {
+      b.state = kOpen;
+      heapPush(to);
+    }
+  }
+}
+
 void MinimalConstruct::repairParent(std::int32_t node) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
   n.state = kUnseen;
@@ -406,7 +443,7 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
       found = true;
       break;
     }
-    for (std::size_t w = 0; w < nodes_.size(); ++w) relax(v, static_cast<std::int32_t>(w));
+    expand(v);
   }
   result.edge_checks = edge_checks_;
   result.discovered = total_discovered_;

@@ -115,6 +115,7 @@ class MinimalConstruct {
   void discoverOne(std::uint32_t global_polygon, bool with_dynamic);
   bool canFollow(std::int32_t from, std::int32_t to) const;
   void relax(std::int32_t from, std::int32_t to);
+  void expand(std::int32_t v);
   void repairParent(std::int32_t node);
   bool edgeKnownBlocked(std::int32_t a, std::int32_t b) const;
   void markEdgeBlocked(std::int32_t a, std::int32_t b);
