@@ -1,0 +1,42 @@
+#pragma once
+// A robot profile (`staa-robot/1`, ARCHITECTURE.md section 6): footprint and limits.
+
+#include "geometry/types.hpp"
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace staa {
+
+struct MotionLimits {
+  double v_max = 2.0;   // m/s forward
+  double v_min = -1.0;  // m/s (negative: backward)
+  double w_max = 3.0;   // rad/s, symmetric
+  double a_max = 2.0;   // m/s^2, symmetric (a_min = -a_max)
+  double b_max = 6.0;   // rad/s^2, symmetric
+};
+
+struct RobotProfile {
+  std::string name;
+  Polygon footprint;  // robot frame, metres, counter-clockwise after loading
+  MotionLimits limits;
+
+  // Radius of the smallest circle about the robot's origin that holds the footprint: the
+  // least inflation of the map for the global path.
+  double circumradius() const;
+};
+
+class ProfileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Errors name the file, the key and the value (e.g. "hsr.yaml: limits.v_max: must be > 0, got -1").
+RobotProfile parseRobotProfile(const std::string& yaml_text, const std::string& source);
+RobotProfile loadRobotProfile(const std::filesystem::path& path);
+
+// The paper's simulated agent (PAPER-MAPS.md, "The agent"), also in config/robots/paper-agent.yaml.
+RobotProfile paperAgentProfile();
+
+}  // namespace staa
