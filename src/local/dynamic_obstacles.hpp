@@ -22,11 +22,19 @@ struct FixedPolygon {
 
 class DynamicObstacleSet {
  public:
+  // An observed hull with more vertices is simplified (conservatively: it only grows) to this
+  // many, which leaves D'(t) room for at least one arc vertex per corner and a 90-degree
+  // chord limit within FixedPolygon::kCapacity.
+  static constexpr std::size_t kMaxHullVertices = 32;
+
   explicit DynamicObstacleSet(std::size_t max_obstacles = 32);
 
   // Sets the observed obstacles: each polygon is replaced by its convex hull (moving things
-  // are compact; convexity allows SAT), truncated to FixedPolygon::kCapacity. Obstacles beyond
-  // max_obstacles are dropped and counted. No allocation.
+  // are compact; convexity allows SAT). A hull of more than kMaxHullVertices is simplified by
+  // extending neighbouring edges over the cheapest edge, so it still contains the polygon;
+  // polygons of any vertex count are accepted (hulled in chunks). Non-finite vertices are
+  // ignored. velocities[k] belongs to polygons[k]; missing velocities count as zero.
+  // Obstacles beyond max_obstacles are dropped and counted (per call). No allocation.
   void set(std::span<const PolygonView> polygons, std::span<const Vec2> velocities);
   void clear();
   std::size_t size() const { return count_; }
@@ -36,13 +44,21 @@ class DynamicObstacleSet {
   void predict(std::size_t k, double t, FixedPolygon& out) const;
   // D'(t): D(t) grown by `radius` (convex: every vertex offset along the outward normals with
   // round corners approximated by chords outside the true arc, so D'(t) contains the exact
-  // grown shape). `arc_steps` segments per corner. No allocation.
+  // grown shape). `arc_steps` segments per corner on average: the polygon gets
+  // max(n, 4) * arc_steps arc vertices (at most FixedPolygon::kCapacity), shared among its
+  // corners so that the widest chord angle is smallest (in proportion to the turning angles),
+  // and never a chord spanning more than 90 degrees (a sharp corner gets no far-out spike).
+  // A point (1 vertex) becomes a circumscribed circle, a segment a stadium. radius <= 0
+  // gives D(t). k < size(). No allocation.
   void predictInflated(std::size_t k, double t, double radius, int arc_steps, FixedPolygon& out) const;
 
   const FixedPolygon& observed(std::size_t k) const { return obstacles_[k]; }
   Vec2 velocity(std::size_t k) const { return velocities_[k]; }
 
  private:
+  static constexpr std::size_t kHullScratch = 128;  // points hulled per chunk
+  void hullInto(PolygonView polygon, FixedPolygon& out);
+
   std::vector<FixedPolygon> obstacles_;
   std::vector<Vec2> velocities_;
   std::vector<Vec2> hull_scratch_;

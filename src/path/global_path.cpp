@@ -27,7 +27,7 @@ std::vector<Polygon> boundsWalls(const Box& b, double t) {
 }
 
 GlobalPathPlanner::GlobalPathPlanner(const PolygonMap& map, const GlobalPathOptions& options)
-    : options_(options), search_(options.search) {
+    : options_(options), static_search_(options.search), dynamic_search_(options.search) {
   real_ = map.obstacles;
   bounds_ = map.bounds;
   if (map.bounds) {
@@ -39,7 +39,8 @@ GlobalPathPlanner::GlobalPathPlanner(const PolygonMap& map, const GlobalPathOpti
                                         options.arc_tolerance_m)
                   : real_;
   real_set_.assign(std::span<const Polygon>(real_), PolygonSet::Options{options.search.grid_cell_m});
-  search_.setStaticObstacles(inflated_);
+  static_search_.setStaticObstacles(inflated_);
+  dynamic_search_.setStaticObstacles(inflated_);
 }
 
 bool GlobalPathPlanner::insideRealObstacle(const Vec2& p) const {
@@ -48,25 +49,42 @@ bool GlobalPathPlanner::insideRealObstacle(const Vec2& p) const {
 }
 
 GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal) {
-  search_.clearDynamicObstacles();
-  return run(start, goal, false);
+  return run(static_search_, start, goal, false);
 }
 
 GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated) {
-  search_.setDynamicObstacles(dynamic_inflated);
-  GlobalPath path = run(start, goal, true);
-  if (path.status == PathStatus::kFound || path.status == PathStatus::kGoalInObstacle) return path;
-  // A moving obstacle closes the way: plan as if it were not there (paper, Sec. III-B).
-  return run(start, goal, false);
+  const GlobalPath fixed = run(static_search_, start, goal, false);
+  if (fixed.status != PathStatus::kFound || dynamic_inflated.empty()) return fixed;
+  dynamic_search_.setDynamicObstacles(dynamic_inflated);
+  if (pathFreeOfDynamic(fixed.path)) {
+    GlobalPath same = fixed;
+    same.dynamic = true;
+    return same;
+  }
+  GlobalPath path = run(dynamic_search_, start, goal, true);
+  if (path.status == PathStatus::kFound) return path;
+  // A moving obstacle closes the way: follow the static path (paper, Sec. III-B).
+  return run(static_search_, start, goal, false);
 }
 
-GlobalPath GlobalPathPlanner::run(const Vec2& start, const Vec2& goal, bool with_dynamic) {
+bool GlobalPathPlanner::pathFreeOfDynamic(std::span<const Vec2> path) const {
+  const PolygonSet& d = dynamic_search_.dynamicObstacles();
+  for (const Vec2& p : path) {
+    if (d.pointBlocked(p)) return false;  // an end inside D' (the segment test needs free ends)
+  }
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    if (d.segmentBlocked(path[i - 1], path[i])) return false;
+  }
+  return true;
+}
+
+GlobalPath GlobalPathPlanner::run(MinimalConstruct& search, const Vec2& start, const Vec2& goal, bool with_dynamic) {
   GlobalPath out;
   if (insideRealObstacle(goal)) {
     out.status = PathStatus::kGoalInObstacle;
     return out;
   }
-  const MinimalConstruct::Result r = search_.query(start, goal, with_dynamic);
+  const MinimalConstruct::Result r = search.query(start, goal, with_dynamic);
   out.expansions = r.expansions;
   out.edge_checks = r.edge_checks;
   out.start_moved = r.start_moved;
@@ -76,7 +94,7 @@ GlobalPath GlobalPathPlanner::run(const Vec2& start, const Vec2& goal, bool with
       out.status = PathStatus::kFound;
       out.path = r.path;
       out.length = r.length;
-      out.dynamic = with_dynamic && search_.dynamicObstacles().polygonCount() > 0;
+      out.dynamic = with_dynamic;
       break;
     case MinimalConstruct::Status::kNoPath: out.status = PathStatus::kNoPath; break;
     case MinimalConstruct::Status::kStartBlocked: out.status = PathStatus::kStartBlocked; break;

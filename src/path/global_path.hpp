@@ -49,6 +49,8 @@ class GlobalPathPlanner {
   // Static path in M'.
   GlobalPath plan(const Vec2& start, const Vec2& goal);
   // Dynamic path in M' ∪ D' (D': already inflated), else the static path. No allocation.
+  // When the static path already avoids D' it is also the dynamic shortest path (obstacles
+  // only lengthen paths), and it is returned without a second search.
   GlobalPath plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated);
 
   // The inflated obstacles M' as simple polygons (for the local map and for drawing).
@@ -56,18 +58,23 @@ class GlobalPathPlanner {
   // The real obstacles including the walls that stand for the map's bounds.
   const std::vector<Polygon>& realObstacles() const { return real_; }
   const GlobalPathOptions& options() const { return options_; }
+  const PolygonSet& realObstacleSet() const { return real_set_; }
   // True when p lies strictly inside a real obstacle or outside the bounds.
   bool insideRealObstacle(const Vec2& p) const;
 
  private:
-  GlobalPath run(const Vec2& start, const Vec2& goal, bool with_dynamic);
+  GlobalPath run(MinimalConstruct& search, const Vec2& start, const Vec2& goal, bool with_dynamic);
+  bool pathFreeOfDynamic(std::span<const Vec2> path) const;
 
   GlobalPathOptions options_;
   std::vector<Polygon> real_;
   std::vector<Polygon> inflated_;
   PolygonSet real_set_;
   std::optional<Box> bounds_;
-  MinimalConstruct search_;
+  // Two searches: the static one keeps its tree from cycle to cycle (same goal, same M'); the
+  // dynamic one is rebuilt whenever D' changes, so it must not wipe the static tree.
+  MinimalConstruct static_search_;
+  MinimalConstruct dynamic_search_;
 };
 
 // Walls standing for "outside the bounds is blocked": four slabs of `thickness` around the box.

@@ -83,9 +83,11 @@ void MinimalConstruct::setDynamicObstacles(std::span<const PolygonView> polygons
   }
   dropped_dynamic_ = polygons.size() - n;
   dynamic_.assign(polygons.first(n), PolygonSet::Options{});
+  if (tree_with_dynamic_) tree_valid_ = false;  // the kept tree saw the old dynamic obstacles
 }
 
 void MinimalConstruct::clearDynamicObstacles() {
+  if (tree_with_dynamic_ && dynamic_.polygonCount() > 0) tree_valid_ = false;
   dynamic_.clear();
   dropped_dynamic_ = 0;
 }
@@ -103,43 +105,55 @@ bool MinimalConstruct::nearestFreePoint(const Vec2& p, bool with_dynamic, Vec2& 
     out = p;
     return true;
   }
-  // Nearest boundary point of either set that neither set covers; candidates are tried in
-  // order of distance (repeated minimum selection: no allocation, rare and short).
-  const std::size_t ns = static_.vertexCount();
-  const std::size_t nd = with_dynamic ? dynamic_.vertexCount() : 0;
-  double floor_d = -1.0;
-  std::size_t floor_v = std::numeric_limits<std::size_t>::max();
-  for (std::size_t attempt = 0; attempt < ns + nd; ++attempt) {
-    double best = kInf;
-    std::size_t best_v = std::numeric_limits<std::size_t>::max();
-    Vec2 best_q = p, best_edge{1.0, 0.0};
-    for (std::size_t v = 0; v < ns + nd; ++v) {
-      const bool is_static = v < ns;
-      const PolygonSet& set = is_static ? static_ : dynamic_;
-      const std::size_t local = is_static ? v : v - ns;
-      const Vec2& a = set.vertex(local);
-      const Vec2& b = set.vertex(set.nextVertex(local));
+  // The free point nearest to p lies on some polygon's boundary. Search boxes of growing
+  // radius R around p: every edge within distance R of p is found through the edge index,
+  // its closest point is a candidate, and candidates are tried nearest first. A candidate
+  // that no other polygon covers (once nudged away from p) is the answer; only candidates
+  // within R count, so the first success is the true nearest. Fixed buffers: no allocation.
+  const Box ext = static_.extent();
+  double radius = 0.25;
+  for (int round = 0; round < 40; ++round, radius *= 2.0) {
+    const Box box{p - Vec2(radius, radius), p + Vec2(radius, radius)};
+    std::size_t count = 0;
+    auto consider = [&](const PolygonSet& set, std::size_t v) {
+      const Vec2& a = set.vertex(v);
+      const Vec2& b = set.vertex(set.nextVertex(v));
       const Vec2 q = closestPointOnSegment(p, a, b);
       const double d = (q - p).norm();
-      if (d < floor_d || (d == floor_d && v <= floor_v)) continue;
-      if (d < best || (d == best && v < best_v)) {
-        best = d;
-        best_v = v;
-        best_q = q;
-        best_edge = b - a;
+      if (d > radius) return false;
+      // Insertion into the sorted buffer; when full, the farthest candidate is dropped (the
+      // round then cannot prove optimality and the next, larger round repeats the search).
+      std::size_t i = std::min(count, candidates_.size() - 1);
+      if (count == candidates_.size() && d >= candidates_.back().distance) {
+        overflow_ = true;
+        return false;
+      }
+      if (count == candidates_.size()) overflow_ = true;
+      while (i > 0 && candidates_[i - 1].distance > d) {
+        candidates_[i] = candidates_[i - 1];
+        --i;
+      }
+      candidates_[i] = Candidate{q, b - a, d};
+      count = std::min(count + 1, candidates_.size());
+      return false;
+    };
+    overflow_ = false;
+    static_.forEachEdgeInBox(box, [&](std::size_t v) { return consider(static_, v); });
+    if (with_dynamic) dynamic_.forEachEdgeInBox(box, [&](std::size_t v) { return consider(dynamic_, v); });
+    for (std::size_t i = 0; i < count; ++i) {
+      const Candidate& c = candidates_[i];
+      Vec2 dir = c.point - p;
+      const double len = dir.norm();
+      dir = len > 0.0 ? Vec2(dir / len) : Vec2(Vec2(c.edge.y(), -c.edge.x()).normalized());
+      const Vec2 candidate = c.point + 1e-6 * dir;
+      if (pointFree(candidate, with_dynamic)) {
+        out = candidate;
+        return true;
       }
     }
-    if (best_v == std::numeric_limits<std::size_t>::max()) break;
-    floor_d = best;
-    floor_v = best_v;
-    Vec2 dir = best_q - p;
-    const double len = dir.norm();
-    dir = len > 0.0 ? Vec2(dir / len) : Vec2(Vec2(best_edge.y(), -best_edge.x()).normalized());
-    const Vec2 candidate = best_q + 1e-6 * dir;
-    if (pointFree(candidate, with_dynamic)) {
-      out = candidate;
-      return true;
-    }
+    const bool covers_all = box.contains(ext.min) && box.contains(ext.max) &&
+                            (!with_dynamic || (box.contains(dynamic_.extent().min) && box.contains(dynamic_.extent().max)));
+    if (covers_all && !overflow_) break;  // every edge was a candidate: nothing is free
   }
   return false;
 }
@@ -379,21 +393,53 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
   // The search runs backwards, from the goal (the root, node 0) to the start. Closed nodes
   // then carry exact distances to the goal, which stay true while the goal and the obstacles
   // stay: the next query to the same goal only swaps the start and resumes the search.
-  const bool persistent = !use_dynamic;
-  const bool reuse = persistent && tree_valid_ && goal == tree_goal_ && nodes_.size() < nodes_.capacity();
+  // A kept tree is valid for the same goal and the same obstacles (static, or static plus
+  // the dynamic set it was grown with: setDynamicObstacles invalidates it).
+  const bool reuse = tree_valid_ && goal == tree_goal_ && use_dynamic == tree_with_dynamic_ &&
+                     nodes_.size() < nodes_.capacity();
+  bool found_fast = false;
   if (reuse) {
     // Retire the previous start: it was never expanded, so nothing hangs below it.
     Node& old = nodes_[static_cast<std::size_t>(target_)];
+    if (old.state == kOpen) heapRemove(target_);
     if (!closed_.empty() && closed_.back() == target_) closed_.pop_back();
     old.state = kClosed;  // never relaxed again
     target_ = addTargetNode(start);
     for (const std::int32_t c : closed_) relax(c, target_);
-    // Re-key the open list for the new start (the heuristic changed) and restore the heap.
-    for (const std::int32_t n : heap_) {
-      Node& node = nodes_[static_cast<std::size_t>(n)];
-      node.f = node.g + (target_pos_ - node.pos).norm();
+    // The common case, without touching the heap: the new start's best connection to the
+    // tree is at least as short as anything still open (true keys, computed by a scan) and
+    // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
+    Node& t = nodes_[static_cast<std::size_t>(target_)];
+    bool done = false;
+    if (t.state == kOpen) {
+      double lower = kInf;
+      for (const std::int32_t n : heap_) {
+        if (n == target_) continue;
+        const Node& o = nodes_[static_cast<std::size_t>(n)];
+        lower = std::min(lower, o.g + (target_pos_ - o.pos).norm());
+      }
+      if (t.g <= lower) {
+        ++edge_checks_;
+        const Vec2& u = nodes_[static_cast<std::size_t>(t.parent)].pos;
+        if (!static_.segmentBlocked(u, t.pos) && !(use_dynamic && dynamic_.segmentBlocked(u, t.pos))) {
+          heapRemove(target_);
+          t.state = kClosed;
+          closed_.push_back(target_);
+          ++result.expansions;
+          done = true;
+        }
+      }
     }
-    for (std::size_t i = heap_.size() / 2; i-- > 0;) heapDown(i);
+    if (done) {
+      found_fast = true;
+    } else {
+      // Re-key the open list for the new start (the heuristic changed) and restore the heap.
+      for (const std::int32_t n : heap_) {
+        Node& node = nodes_[static_cast<std::size_t>(n)];
+        node.f = node.g + (target_pos_ - node.pos).norm();
+      }
+      for (std::size_t i = heap_.size() / 2; i-- > 0;) heapDown(i);
+    }
   } else {
     resetSearch(goal, use_dynamic);
     target_ = addTargetNode(start);
@@ -403,13 +449,14 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     root.f = (start - goal).norm();
     root.state = kOpen;
     heapPush(0);
-    tree_valid_ = persistent;
+    tree_valid_ = true;
+    tree_with_dynamic_ = use_dynamic;
     tree_goal_ = goal;
   }
 
   const std::size_t ns_poly = static_.polygonCount();
-  bool found = false;
-  while (!heap_.empty()) {
+  bool found = found_fast;
+  while (!found && !heap_.empty()) {
     const std::int32_t v = heapPop();
     Node& node = nodes_[static_cast<std::size_t>(v)];
     if (node.parent != kNone) {
@@ -512,6 +559,18 @@ void MinimalConstruct::heapPush(std::int32_t n) {
 
 void MinimalConstruct::heapDecrease(std::int32_t n) {
   heapUp(static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].heap_pos));
+}
+
+void MinimalConstruct::heapRemove(std::int32_t n) {
+  const auto i = static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].heap_pos);
+  const std::int32_t last = heap_.back();
+  heap_.pop_back();
+  nodes_[static_cast<std::size_t>(n)].heap_pos = kNone;
+  if (last == n) return;
+  heap_[i] = last;
+  nodes_[static_cast<std::size_t>(last)].heap_pos = static_cast<std::int32_t>(i);
+  heapUp(i);
+  heapDown(static_cast<std::size_t>(nodes_[static_cast<std::size_t>(last)].heap_pos));
 }
 
 std::int32_t MinimalConstruct::heapPop() {

@@ -13,9 +13,10 @@
 // against all of them.
 //
 // The search runs backwards from the goal, so its closed nodes hold exact distances to the
-// goal. Static queries to the same goal keep the whole search tree: the next query (the
-// robot a few centimetres further) only connects the new start and resumes. Queries with
-// dynamic obstacles start afresh but keep the static polygons discovered for that goal.
+// goal. Queries to the same goal among the same obstacles keep the whole search tree: the
+// next query (the robot a few centimetres further, or the next state of a STAA* search) only
+// connects the new start and resumes. Replacing the dynamic obstacles invalidates a tree
+// grown with them; the static polygons discovered for the goal are kept regardless.
 //
 // Static obstacles (the inflated map M') are indexed once. Dynamic obstacles (the inflated
 // moving obstacles D') are replaced every cycle without allocating.
@@ -59,8 +60,8 @@ class MinimalConstruct {
     std::uint32_t discovered = 0;        // polygons whose corners are in the graph (incl. kept ones)
   };
 
-  MinimalConstruct() = default;
-  explicit MinimalConstruct(const Options& options) : options_(options) {}
+  MinimalConstruct() : candidates_(kCandidates) {}
+  explicit MinimalConstruct(const Options& options) : options_(options), candidates_(kCandidates) {}
 
   // Replaces the static obstacles (load time: allocates and sizes every workspace).
   void setStaticObstacles(std::span<const Polygon> polygons);
@@ -86,6 +87,7 @@ class MinimalConstruct {
  private:
   static constexpr std::int32_t kNone = -1;
   static constexpr std::size_t kTreeSlack = 4096;
+  static constexpr std::size_t kCandidates = 256;
   enum : std::uint8_t { kUnseen = 0, kOpen = 1, kClosed = 2 };
 
   struct Node {
@@ -124,11 +126,19 @@ class MinimalConstruct {
   void heapPush(std::int32_t n);
   void heapDecrease(std::int32_t n);
   std::int32_t heapPop();
+  void heapRemove(std::int32_t n);
   void heapUp(std::size_t i);
   void heapDown(std::size_t i);
   bool heapLess(std::int32_t a, std::int32_t b) const;
 
   Options options_;
+  struct Candidate {
+    Vec2 point{0.0, 0.0};
+    Vec2 edge{1.0, 0.0};
+    double distance = 0.0;
+  };
+  // nearestFreePoint's candidate boundary points, nearest first.
+  mutable std::vector<Candidate> candidates_;
   PolygonSet static_;
   PolygonSet dynamic_;
   std::size_t dropped_dynamic_ = 0;
@@ -142,6 +152,7 @@ class MinimalConstruct {
   std::vector<std::uint32_t> blockers_;
   std::vector<std::uint32_t> pending_;   // polygons waiting to be discovered
   std::vector<std::uint32_t> covering_;
+  mutable bool overflow_ = false;
   // Per static vertex: the other static polygons that contain it (CSR), computed once.
   std::vector<std::uint32_t> static_cover_offsets_;
   std::vector<std::uint32_t> static_cover_;
@@ -157,6 +168,7 @@ class MinimalConstruct {
   Vec2 target_pos_{0.0, 0.0};  // the start: the backward search's target, its heuristic's anchor
   std::int32_t target_ = kNone;
   bool tree_valid_ = false;    // the search tree may be resumed for tree_goal_
+  bool tree_with_dynamic_ = false;  // ... and it was grown with the dynamic obstacles
   Vec2 tree_goal_{0.0, 0.0};
   std::uint32_t total_discovered_ = 0;
   std::uint32_t edge_checks_ = 0;

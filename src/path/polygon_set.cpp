@@ -105,6 +105,14 @@ void PolygonSet::assign(std::span<const PolygonView> polygons, const Options& op
   edge_stamp_.assign(vertices_.size(), 0);
   poly_stamp_.assign(polys_.size(), 0);
   stamp_ = 0;
+  extent_ = Box{};
+  if (!polys_.empty()) {
+    extent_ = polys_[0].box;
+    for (const PolyRec& r : polys_) {
+      extent_.min = extent_.min.cwiseMin(r.box.min);
+      extent_.max = extent_.max.cwiseMax(r.box.max);
+    }
+  }
   if (options.cell_size > 0.0 && !polys_.empty()) buildGrid(options.cell_size);
 }
 
@@ -119,11 +127,7 @@ std::size_t PolygonSet::nextVertex(std::size_t v) const {
 }
 
 void PolygonSet::buildGrid(double cell_size) {
-  Box ext = polys_[0].box;
-  for (const PolyRec& r : polys_) {
-    ext.min = ext.min.cwiseMin(r.box.min);
-    ext.max = ext.max.cwiseMax(r.box.max);
-  }
+  const Box ext = extent_;
   cell_ = cell_size;
   while ((ext.width() / cell_ + 1.0) * (ext.height() / cell_ + 1.0) > kMaxGridCells) cell_ *= 2.0;
   grid_origin_ = ext.min;

@@ -12,6 +12,8 @@
 
 #include "geometry/types.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -67,6 +69,12 @@ class PolygonSet {
   // is listed once.
   std::size_t segmentBlockers(const Vec2& a, const Vec2& b, std::span<std::uint32_t> out) const;
 
+  // Calls visit(v) once for every edge (by start vertex v) whose bounding box may overlap
+  // `box` (all edges when there is no grid). Stops early when visit returns true.
+  template <typename Visitor>
+  bool forEachEdgeInBox(const Box& box, Visitor&& visit) const;
+  const Box& extent() const { return extent_; }
+
   // Distance from p to the nearest polygon edge (inside or outside); infinity when empty.
   double distanceToNearestEdge(const Vec2& p) const;
 
@@ -100,6 +108,7 @@ class PolygonSet {
 
   // Uniform grid over the set's extent: per cell, the edges (by start vertex) that overlap
   // the cell's box and the polygons whose box overlaps it. CSR layout (offsets + items).
+  Box extent_;
   bool has_grid_ = false;
   double cell_ = 1.0;
   Vec2 grid_origin_{0.0, 0.0};
@@ -114,5 +123,39 @@ class PolygonSet {
   mutable std::vector<std::uint32_t> poly_stamp_;
   mutable std::uint32_t stamp_ = 0;
 };
+
+template <typename Visitor>
+bool PolygonSet::forEachEdgeInBox(const Box& box, Visitor&& visit) const {
+  if (++stamp_ == 0) {
+    std::fill(edge_stamp_.begin(), edge_stamp_.end(), 0);
+    std::fill(poly_stamp_.begin(), poly_stamp_.end(), 0);
+    stamp_ = 1;
+  }
+  if (!has_grid_) {
+    for (std::size_t k = 0; k < polys_.size(); ++k) {
+      if (!polys_[k].box.overlaps(box)) continue;
+      for (std::uint32_t v = polys_[k].first; v < polys_[k].first + polys_[k].count; ++v) {
+        if (visit(static_cast<std::size_t>(v))) return true;
+      }
+    }
+    return false;
+  }
+  const int x0 = std::max(static_cast<int>(std::floor((box.min.x() - grid_origin_.x()) / cell_)), 0);
+  const int y0 = std::max(static_cast<int>(std::floor((box.min.y() - grid_origin_.y()) / cell_)), 0);
+  const int x1 = std::min(static_cast<int>(std::floor((box.max.x() - grid_origin_.x()) / cell_)), grid_w_ - 1);
+  const int y1 = std::min(static_cast<int>(std::floor((box.max.y() - grid_origin_.y()) / cell_)), grid_h_ - 1);
+  for (int y = y0; y <= y1; ++y) {
+    for (int x = x0; x <= x1; ++x) {
+      const std::size_t cell = static_cast<std::size_t>(y) * static_cast<std::size_t>(grid_w_) + static_cast<std::size_t>(x);
+      for (std::uint32_t i = cell_edge_offsets_[cell]; i < cell_edge_offsets_[cell + 1]; ++i) {
+        const std::uint32_t v = cell_edges_[i];
+        if (edge_stamp_[v] == stamp_) continue;
+        edge_stamp_[v] = stamp_;
+        if (visit(static_cast<std::size_t>(v))) return true;
+      }
+    }
+  }
+  return false;
+}
 
 }  // namespace staa

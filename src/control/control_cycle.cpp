@@ -1,0 +1,122 @@
+#include "control/control_cycle.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace staa {
+
+const char* toString(CycleState state) {
+  switch (state) {
+    case CycleState::kIdle: return "idle";
+    case CycleState::kDriving: return "driving";
+    case CycleState::kReached: return "reached";
+    case CycleState::kUnreachable: return "unreachable";
+  }
+  return "unknown";
+}
+
+GlobalPathOptions ControlCycle::pathOptions(const ControlConfig& config, double inflation) {
+  GlobalPathOptions o = config.path;
+  o.inflation_radius_m = inflation;
+  return o;
+}
+
+namespace {
+double inflationFor(const ControlConfig& config, const RobotProfile& robot) {
+  return config.inflation_m > 0.0 ? config.inflation_m : robot.circumradius();
+}
+StaaConfig staaFor(StaaConfig c, double inflation) {
+  c.heuristic.dynamic_inflation_m = inflation;
+  return c;
+}
+}  // namespace
+
+ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, const ControlConfig& config)
+    : config_(config),
+      robot_(robot),
+      inflation_(inflationFor(config, robot)),
+      path_(map, pathOptions(config, inflation_)),
+      local_(config.local),
+      staa_(staaFor(config.staa, inflation_), robot, path_.inflatedObstacles(), config.local),
+      empty_obstacles_(1) {}
+
+void ControlCycle::setGoal(const Pose2& goal) {
+  goal_ = goal;
+  state_ = CycleState::kDriving;
+}
+
+void ControlCycle::clearGoal() {
+  goal_.reset();
+  state_ = CycleState::kIdle;
+}
+
+CycleOutput ControlCycle::stop(const UnicycleState& robot, CycleState state) {
+  // Decelerate at the limits towards standstill: the command for the next cycle.
+  CycleOutput out;
+  const double period = 1.0 / config_.rate_hz;
+  const Action brake = brakeAction(robot, robot_.limits, period);
+  out.v_cmd = robot.v + brake.a * period;
+  out.w_cmd = robot.w + brake.b * period;
+  out.state = state;
+  return out;
+}
+
+CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) {
+  const UnicycleState& robot = inputs.robot;
+  const DynamicObstacleSet& obstacles = inputs.obstacles != nullptr ? *inputs.obstacles : empty_obstacles_;
+  if (!goal_ || state_ == CycleState::kIdle) return stop(robot, CycleState::kIdle);
+  const Pose2 goal = *goal_;
+
+  // At the goal: stop and report (and stay stopped until a new goal).
+  const double dist = (robot.position() - goal.position()).norm();
+  const bool heading_ok = config_.goal_heading_tolerance > kPi ||
+                          std::abs(wrapAngle(robot.theta - goal.theta)) <= config_.goal_heading_tolerance;
+  if (state_ == CycleState::kReached || (dist <= config_.goal_tolerance_m && heading_ok)) {
+    state_ = CycleState::kReached;
+    return stop(robot, state_);
+  }
+
+  CycleOutput out;
+  // 1. Global path, around the inflated moving obstacles where possible.
+  std::int64_t t0 = steadyClockNs();
+  const std::size_t n = std::min(obstacles.size(), views_.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    obstacles.predictInflated(i, 0.0, inflation_, config_.staa.heuristic.arc_steps, inflated_[i]);
+    views_[i] = inflated_[i].view();
+  }
+  const GlobalPath path = n > 0 ? path_.plan(robot.position(), goal.position(), std::span<const PolygonView>(views_.data(), n))
+                                : path_.plan(robot.position(), goal.position());
+  out.path_ns = steadyClockNs() - t0;
+  out.path_status = path.status;
+  out.path_dynamic = path.dynamic;
+  out.path_length = path.length;
+  if (path.status != PathStatus::kFound) {
+    state_ = CycleState::kUnreachable;
+    CycleOutput stopped = stop(robot, state_);
+    stopped.path_status = path.status;
+    stopped.path_ns = out.path_ns;
+    return stopped;
+  }
+  last_path_ = path.path;
+
+  // 2. Local map and the intermediate goal.
+  t0 = steadyClockNs();
+  local_.update(robot.pose(), path_.realObstacleSet(), path.path, goal.theta);
+  out.local_ns = steadyClockNs() - t0;
+
+  // 3. STAA*.
+  t0 = steadyClockNs();
+  out.plan = staa_.plan(robot, local_, obstacles, budget);
+  out.plan_ns = steadyClockNs() - t0;
+  out.planned = true;
+
+  // 4. The first action, held for one control period, gives the next velocity command.
+  const double period = 1.0 / config_.rate_hz;
+  const MotionLimits& lim = robot_.limits;
+  out.v_cmd = std::clamp(robot.v + out.plan.first_action.a * period, lim.v_min, lim.v_max);
+  out.w_cmd = std::clamp(robot.w + out.plan.first_action.b * period, -lim.w_max, lim.w_max);
+  out.state = state_ = CycleState::kDriving;
+  return out;
+}
+
+}  // namespace staa

@@ -1,0 +1,100 @@
+#pragma once
+// One control cycle of the paper's Sec. III as a plain object: step(inputs, budget) ->
+// command + stats. Threads, clocks and hardware stay outside: the daemon calls it from its
+// 30 Hz thread, the simulator in simulated time, the tests in lockstep.
+//
+//   1. global path in M' ∪ D' (static fallback)             src/path
+//   2. local map: box, G~, collision grid C, costmap C'       src/local
+//   3. STAA* from the robot's state to G~                    src/planner
+//   4. the velocity command for the next cycle               here
+//
+// Everything is sized at construction; step() allocates nothing.
+
+#include "control/robot_profile.hpp"
+#include "local/dynamic_obstacles.hpp"
+#include "local/local_map.hpp"
+#include "map/polygon_map.hpp"
+#include "path/global_path.hpp"
+#include "planner/staa_star.hpp"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+
+namespace staa {
+
+enum class CycleState : std::uint8_t {
+  kIdle,         // no goal
+  kDriving,      // on the way
+  kReached,      // at the goal: stopped, reported
+  kUnreachable,  // no path to the goal (or the goal is inside an obstacle): stopped, reported
+};
+const char* toString(CycleState state);
+
+struct ControlConfig {
+  double rate_hz = 30.0;
+  double goal_tolerance_m = 0.2;        // position error that counts as arrived
+  double goal_heading_tolerance = 0.4;  // rad; > pi ignores the heading
+  double inflation_m = 0.0;             // M' and D' growth; 0: the footprint's circumradius
+  StaaConfig staa;
+  LocalMapConfig local;
+  GlobalPathOptions path;
+  std::size_t max_dynamic_obstacles = 32;
+};
+
+struct CycleInputs {
+  UnicycleState robot;                           // pose and velocities (odometry + localization)
+  const DynamicObstacleSet* obstacles = nullptr;  // D at this cycle's time; may be null
+};
+
+struct CycleOutput {
+  double v_cmd = 0.0;  // velocity command for the next cycle
+  double w_cmd = 0.0;
+  CycleState state = CycleState::kIdle;
+  PathStatus path_status = PathStatus::kNoPath;
+  bool path_dynamic = false;
+  double path_length = 0.0;
+  PlanResult plan;
+  bool planned = false;  // false when no STAA* ran (idle, reached, unreachable)
+  std::int64_t path_ns = 0;
+  std::int64_t local_ns = 0;
+  std::int64_t plan_ns = 0;
+};
+
+class ControlCycle {
+ public:
+  ControlCycle(const PolygonMap& map, const RobotProfile& robot, const ControlConfig& config);
+
+  void setGoal(const Pose2& goal);
+  void clearGoal();
+  const std::optional<Pose2>& goal() const { return goal_; }
+
+  CycleOutput step(const CycleInputs& inputs, PlannerBudget budget);
+
+  const LocalMap& localMap() const { return local_; }
+  const GlobalPathPlanner& pathPlanner() const { return path_; }
+  std::span<const Vec2> lastPath() const { return last_path_; }
+  StaaStar& planner() { return staa_; }
+  const ControlConfig& config() const { return config_; }
+  const RobotProfile& robot() const { return robot_; }
+  double inflation() const { return inflation_; }
+
+ private:
+  CycleOutput stop(const UnicycleState& robot, CycleState state);
+  static GlobalPathOptions pathOptions(const ControlConfig& config, double inflation);
+
+  ControlConfig config_;
+  RobotProfile robot_;
+  double inflation_;
+  GlobalPathPlanner path_;
+  LocalMap local_;
+  StaaStar staa_;
+  DynamicObstacleSet empty_obstacles_;
+  std::optional<Pose2> goal_;
+  CycleState state_ = CycleState::kIdle;
+  std::array<FixedPolygon, 64> inflated_{};
+  std::array<PolygonView, 64> views_{};
+  std::span<const Vec2> last_path_;
+};
+
+}  // namespace staa

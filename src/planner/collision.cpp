@@ -1,0 +1,210 @@
+#include "planner/collision.hpp"
+
+#include "geometry/clip.hpp"
+#include "geometry/convex.hpp"
+#include "geometry/polygon.hpp"
+#include "planner/distance_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace staa {
+
+namespace {
+constexpr float kFar = 1e9f;
+}  // namespace
+
+CollisionChecker::CollisionChecker(const RobotProfile& robot, double cell_m) : footprint_(robot.footprint), cell_(cell_m) {
+  if (!isCounterClockwise(footprint_)) std::reverse(footprint_.begin(), footprint_.end());
+  convex_ = isConvex(footprint_);
+  circumradius_ = robot.circumradius();
+  sample_step_ = 0.9 * cell_m;
+
+  // Outline points: every vertex plus points along each edge, no two more than a sample
+  // step apart.
+  const std::size_t n = footprint_.size();
+  for (std::size_t i = 0; i < n && outline_count_ < kMaxOutline; ++i) {
+    const Vec2& a = footprint_[i];
+    const Vec2& b = footprint_[(i + 1) % n];
+    const int pieces = std::max(1, static_cast<int>(std::ceil((b - a).norm() / sample_step_)));
+    for (int k = 0; k < pieces && outline_count_ < kMaxOutline; ++k) {
+      outline_[outline_count_++] = a + (b - a) * (static_cast<double>(k) / pieces);
+    }
+  }
+  double area = 0.0;
+  Vec2 c{0.0, 0.0};
+  for (std::size_t i = 0; i < n; ++i) {
+    const double cr = cross(footprint_[i], footprint_[(i + 1) % n]);
+    area += cr;
+    c += (footprint_[i] + footprint_[(i + 1) % n]) * cr;
+  }
+  centroid_ = std::abs(area) > 0.0 ? Vec2(c / (3.0 * area)) : footprint_[0];
+
+  // Covering circles along the footprint's longer axis of its bounding box: each covers its
+  // slab of the box, so together they cover the footprint (a conservative first test).
+  const Box b = boundingBox(footprint_);
+  const bool along_x = b.width() >= b.height();
+  const double len = along_x ? b.width() : b.height();
+  const double wid = along_x ? b.height() : b.width();
+  const std::size_t k = std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(1.5 * len / std::max(wid, 1e-3))), 1, kMaxCircles);
+  const double slab = len / static_cast<double>(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const double along = (along_x ? b.min.x() : b.min.y()) + (static_cast<double>(i) + 0.5) * slab;
+    const double across = along_x ? 0.5 * (b.min.y() + b.max.y()) : 0.5 * (b.min.x() + b.max.x());
+    circle_centers_[i] = along_x ? Vec2(along, across) : Vec2(across, along);
+    circle_radii_[i] = std::hypot(0.5 * slab, 0.5 * wid);
+  }
+  circle_count_ = k;
+}
+
+void CollisionChecker::prepare(const LocalMap& map) {
+  map_ = &map;
+  // World -> grid cells: into the box's frame (origin at the robot, x ahead), shift so that
+  // the rear-right corner is (0, 0), divide by the cell size.
+  const Pose2& o = map.origin();
+  const double c = std::cos(o.theta), sn = std::sin(o.theta), inv = 1.0 / map.config().cell_m;
+  gxx_ = c * inv;
+  gxy_ = sn * inv;
+  gx0_ = (-c * o.x - sn * o.y + map.config().behind_m) * inv;
+  gyx_ = -sn * inv;
+  gyy_ = c * inv;
+  gy0_ = (sn * o.x - c * o.y + map.config().side_m) * inv;
+  grid_ = map.grid().data();
+  grid_w_ = map.width();
+  grid_h_ = map.height();
+  distance_.resize(static_cast<std::size_t>(map.width()) * static_cast<std::size_t>(map.height()));  // once
+  conservativeDistanceField(map.grid(), map.width(), map.height(), cell_, distance_);
+}
+
+bool CollisionChecker::poseFreeStatic(const Pose2& pose) const {
+  return fastPoseFreeStatic(FastPose{pose.x, pose.y, std::cos(pose.theta), std::sin(pose.theta)});
+}
+
+bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) const {
+  // Robot frame -> grid: the pose's rotation and translation composed with the grid's map.
+  const double ax = gxx_ * p.c + gxy_ * p.s, ay = -gxx_ * p.s + gxy_ * p.c;  // robot x, y axes in grid x
+  const double bx = gyx_ * p.c + gyy_ * p.s, by = -gyx_ * p.s + gyy_ * p.c;  // ... in grid y
+  const double ox = gridX(p.x, p.y), oy = gridY(p.x, p.y);
+  bool clear = true;
+  double margin = kFar;
+  for (std::size_t k = 0; k < circle_count_ && clear; ++k) {
+    const Vec2& q = circle_centers_[k];
+    const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
+    // Outside the box the grid knows nothing: free (and no slack is claimed there).
+    if (cell < 0) {
+      margin = 0.0;
+      continue;
+    }
+    const double m = distance_[static_cast<std::size_t>(cell)] - circle_radii_[k];
+    clear = m >= 0.0;
+    margin = std::min(margin, m);
+  }
+  if (slack != nullptr) *slack = clear ? margin : 0.0;
+  if (clear) return true;
+  auto occupiedAt = [&](const Vec2& q) {
+    const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
+    return cell >= 0 && grid_[cell] != 0;
+  };
+  if (occupiedAt(centroid_)) return false;
+  for (std::size_t k = 0; k < outline_count_; ++k) {
+    if (occupiedAt(outline_[k])) return false;
+  }
+  return true;
+}
+
+int CollisionChecker::samplesFor(const ArcVelocities& vel, double dt) const {
+  // No outline point may move more than a sample step between two samples: translation plus
+  // rotation times the farthest point's radius bounds that motion.
+  const double travel = std::abs(vel.v_mid) * dt + std::abs(vel.w_mid) * dt * circumradius_;
+  return std::max(1, static_cast<int>(std::ceil(travel / sample_step_)));
+}
+
+bool CollisionChecker::motionFreeStatic(const UnicycleState& from, const ArcVelocities& vel, double dt) const {
+  const int n = samplesFor(vel, dt);
+  // Check the end pose first: most collisions show there, and it is the one the paper checks.
+  const Pose2 end = poseAlongArc(from, vel.v_mid, vel.w_mid, dt);
+  if (!poseFreeStatic(end)) return false;
+  if (n <= 1) return true;
+  // The samples in between, stepping the heading by a fixed rotation (no sincos per sample).
+  // Positions follow Eq. (2) from the rotated heading, or the straight line when w ~ 0. A
+  // checked pose's clearance margin lets the following samples within that much travel go
+  // unchecked: no point of the robot moves farther than the travel bound per sample.
+  const double step = vel.w_mid * dt / n;
+  const double cs = std::cos(step), ss = std::sin(step);
+  const double c0 = std::cos(from.theta), s0 = std::sin(from.theta);
+  const bool straight = std::abs(vel.w_mid * dt) < 1e-6;
+  const double r = straight ? 0.0 : vel.v_mid / vel.w_mid;
+  const double per_sample = (std::abs(vel.v_mid) * dt + std::abs(vel.w_mid) * dt * circumradius_) / n;
+  double c = c0, sn = s0;
+  double covered = -1.0;  // travel still covered by the last checked pose's margin
+  for (int k = 1; k < n; ++k) {
+    const double nc = c * cs - sn * ss;
+    sn = sn * cs + c * ss;
+    c = nc;
+    covered -= per_sample;
+    if (covered >= 0.0) continue;
+    FastPose p{0.0, 0.0, c, sn};
+    if (straight) {
+      const double d = vel.v_mid * dt * k / n;
+      p.x = from.x + d * c0;
+      p.y = from.y + d * s0;
+    } else {
+      p.x = from.x + r * (sn - s0);
+      p.y = from.y - r * (c - c0);
+    }
+    double margin = 0.0;
+    if (!fastPoseFreeStatic(p, &margin)) return false;
+    covered = margin;
+  }
+  return true;
+}
+
+bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t) const {
+  const Vec2 p = pose.position();
+  bool placed = false;
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    const FixedPolygon& o = obstacles.observed(k);
+    const Vec2 shift = obstacles.velocity(k) * t;
+    const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
+    const double r = 0.5 * (o.box.max - o.box.min).norm();
+    if ((center - p).squaredNorm() > (r + circumradius_) * (r + circumradius_)) continue;
+    if (!placed) {
+      transformPolygon(footprint_, pose, placed_);
+      placed = true;
+    }
+    obstacles.predict(k, t, scratch_);
+    const PolygonView robot{placed_.data(), footprint_.size()};
+    if (convex_ ? convexIntersect(robot, scratch_.view()) : polygonsOverlap(robot, scratch_.view())) return false;
+  }
+  return true;
+}
+
+bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
+                                         const DynamicObstacleSet& obstacles, double t0) const {
+  if (obstacles.size() == 0) return true;
+  const int n = samplesFor(vel, dt);
+  for (int k = n; k >= 1; --k) {
+    const double t = dt * k / n;
+    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t)) return false;
+  }
+  return true;
+}
+
+double CollisionChecker::distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    const FixedPolygon& o = obstacles.observed(k);
+    const Vec2 shift = obstacles.velocity(k) * t;
+    // Box distance first: an obstacle whose box is farther than the best so far cannot win.
+    const Vec2 lo = o.box.min + shift, hi = o.box.max + shift;
+    const double dx = std::max({lo.x() - p.x(), 0.0, p.x() - hi.x()});
+    const double dy = std::max({lo.y() - p.y(), 0.0, p.y() - hi.y()});
+    if (dx * dx + dy * dy >= best * best) continue;
+    obstacles.predict(k, t, scratch_);
+    best = std::min(best, distanceToEdges(p, scratch_.view()));
+  }
+  return best;
+}
+
+}  // namespace staa

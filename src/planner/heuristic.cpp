@@ -1,0 +1,204 @@
+#include "planner/heuristic.hpp"
+
+#include "planner/distance_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace staa {
+
+const char* toString(HeuristicKind kind) {
+  switch (kind) {
+    case HeuristicKind::kPathRtr: return "path-rtr";
+    case HeuristicKind::kPathEuclid: return "path-euclid";
+    case HeuristicKind::kDijkstraRtr: return "dijkstra-rtr";
+  }
+  return "unknown";
+}
+
+bool parseHeuristicKind(const char* text, HeuristicKind& out) {
+  for (HeuristicKind k : {HeuristicKind::kPathRtr, HeuristicKind::kPathEuclid, HeuristicKind::kDijkstraRtr}) {
+    if (std::strcmp(text, toString(k)) == 0) {
+      out = k;
+      return true;
+    }
+  }
+  return false;
+}
+
+double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits) {
+  // Eq. (4, 5): RTR segments concatenated. Each segment is driven facing along it (forward,
+  // v_max) or facing against it (backward, |v_min|); the two choices are the DP's states, so
+  // turning around between segments costs its rotation like any other turn.
+  const double inv_w = 1.0 / limits.w_max;
+  const double inv_vf = 1.0 / limits.v_max;
+  const double inv_vb = limits.v_min < 0.0 ? 1.0 / -limits.v_min : std::numeric_limits<double>::infinity();
+  double cost_f = 0.0, cost_b = 0.0;  // best cost arriving at the current vertex facing fwd/bwd
+  double head_f = start_theta, head_b = start_theta;
+  bool first = true;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const Vec2 d = path[i] - path[i - 1];
+    const double len = d.norm();
+    if (len < 1e-9) continue;
+    const double phi = std::atan2(d.y(), d.x());
+    const double fwd = phi, bwd = phi + kPi;
+    double nf, nb;
+    if (first) {
+      nf = std::abs(wrapAngle(fwd - start_theta)) * inv_w + len * inv_vf;
+      nb = std::abs(wrapAngle(bwd - start_theta)) * inv_w + len * inv_vb;
+      first = false;
+    } else {
+      nf = std::min(cost_f + std::abs(wrapAngle(fwd - head_f)) * inv_w, cost_b + std::abs(wrapAngle(fwd - head_b)) * inv_w) +
+           len * inv_vf;
+      nb = std::min(cost_f + std::abs(wrapAngle(bwd - head_f)) * inv_w, cost_b + std::abs(wrapAngle(bwd - head_b)) * inv_w) +
+           len * inv_vb;
+    }
+    cost_f = nf;
+    cost_b = nb;
+    head_f = fwd;
+    head_b = bwd;
+  }
+  if (first) return std::abs(wrapAngle(goal_theta - start_theta)) * inv_w;  // already there
+  return std::min(cost_f + std::abs(wrapAngle(goal_theta - head_f)) * inv_w,
+                  cost_b + std::abs(wrapAngle(goal_theta - head_b)) * inv_w);
+}
+
+Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, const std::vector<Polygon>& inflated_static,
+                     const LocalMapConfig& local)
+    : config_(config), limits_(limits) {
+  config_.dynamic_depth = std::clamp(config_.dynamic_depth, 0, 3);
+  MinimalConstruct::Options opt;
+  opt.max_dynamic_polygons = views_.size();
+  opt.max_dynamic_vertices = views_.size() * FixedPolygon::kCapacity;
+  static_search_ = MinimalConstruct(opt);
+  static_search_.setStaticObstacles(inflated_static);
+  for (MinimalConstruct& mc : dynamic_search_) {
+    mc = MinimalConstruct(opt);
+    mc.setStaticObstacles(inflated_static);
+  }
+  const int w = static_cast<int>(std::lround((local.ahead_m + local.behind_m) / local.cell_m));
+  const int h = static_cast<int>(std::lround(2.0 * local.side_m / local.cell_m));
+  const std::size_t cells = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (config_.kind == HeuristicKind::kDijkstraRtr) {
+    dijkstra_.assign(cells, 0.0f);
+    dijkstra_dir_.assign(cells, 0.0f);
+    free_.assign(cells, 0);
+    heap_.reserve(8 * cells + 8);
+  }
+}
+
+void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map) {
+  goal_ = goal;
+  map_ = &map;
+  const std::size_t n = std::min(obstacles.size(), views_.size());
+  for (int k = 0; k < 3; ++k) {
+    has_dynamic_[static_cast<std::size_t>(k)] = k < config_.dynamic_depth && n > 0;
+    if (!has_dynamic_[static_cast<std::size_t>(k)]) continue;
+    for (std::size_t i = 0; i < n; ++i) {
+      FixedPolygon& f = inflated_[static_cast<std::size_t>(k) * views_.size() + i];
+      obstacles.predictInflated(i, (k + 1) * dt, config_.dynamic_inflation_m, config_.arc_steps, f);
+      views_[i] = f.view();
+    }
+    dynamic_search_[static_cast<std::size_t>(k)].setDynamicObstacles(std::span<const PolygonView>(views_.data(), n));
+  }
+  if (config_.kind == HeuristicKind::kDijkstraRtr) buildDijkstra(map);
+}
+
+double Heuristic::evaluate(const UnicycleState& s, int depth) {
+  ++queries_;
+  if (config_.kind == HeuristicKind::kDijkstraRtr) return evaluateDijkstra(s);
+  return evaluatePath(s, depth);
+}
+
+double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
+  const Vec2 p = s.position();
+  const Vec2 g = goal_.position();
+  MinimalConstruct::Result r;
+  const bool dynamic = depth >= 1 && depth <= config_.dynamic_depth && has_dynamic_[static_cast<std::size_t>(depth - 1)];
+  if (dynamic) r = dynamic_search_[static_cast<std::size_t>(depth - 1)].query(p, g, true);
+  // No way around the predicted obstacles (a person in the door): the static path.
+  if (!dynamic || r.status != MinimalConstruct::Status::kFound) r = static_search_.query(p, g, false);
+  if (r.status != MinimalConstruct::Status::kFound) {
+    last_path_ = {};
+    // Unreachable G~: rank states by straight-line RTR, far behind any reachable state.
+    const Vec2 line[2] = {p, g};
+    return config_.unreachable_penalty_s + pathRtr(line, s.theta, goal_.theta, limits_);
+  }
+  last_path_ = r.path;
+  if (config_.kind == HeuristicKind::kPathEuclid) return r.length / limits_.v_max;
+  return pathRtr(r.path, s.theta, goal_.theta, limits_);
+}
+
+void Heuristic::buildDijkstra(const LocalMap& map) {
+  const int w = map.width(), h = map.height();
+  // Free cells: farther from every occupied cell than the robot's radius.
+  conservativeDistanceField(map.grid(), w, h, map.config().cell_m, dijkstra_);
+  for (std::size_t i = 0; i < free_.size(); ++i) free_[i] = dijkstra_[i] >= config_.dynamic_inflation_m ? 1 : 0;
+  const float inf = std::numeric_limits<float>::infinity();
+  std::fill(dijkstra_.begin(), dijkstra_.end(), inf);
+  heap_.clear();
+  int gi, gj;
+  if (!map.cellOf(goal_.position(), gi, gj)) {
+    // G~ on the box boundary can round to just outside: clamp into the grid.
+    const Vec2 local = map.origin().inverseTransform(goal_.position());
+    gi = std::clamp(static_cast<int>(std::floor((local.x() + map.config().behind_m) / map.config().cell_m)), 0, w - 1);
+    gj = std::clamp(static_cast<int>(std::floor((local.y() + map.config().side_m) / map.config().cell_m)), 0, h - 1);
+  }
+  const std::size_t start = static_cast<std::size_t>(gj) * static_cast<std::size_t>(w) + static_cast<std::size_t>(gi);
+  dijkstra_[start] = 0.0f;
+  dijkstra_dir_[start] = static_cast<float>(goal_.theta);
+  auto greater = [&](std::uint32_t a, std::uint32_t b) { return dijkstra_[a] > dijkstra_[b]; };
+  heap_.push_back(static_cast<std::uint32_t>(start));
+  const float cell = static_cast<float>(map.config().cell_m);
+  const int di[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+  const int dj[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+  const float step[8] = {1, 1, 1, 1, 1.41421356f, 1.41421356f, 1.41421356f, 1.41421356f};
+  const double box_theta = map.origin().theta;
+  // Lazy-deletion Dijkstra; each cell is pushed at most 8 times, which the reserve covers.
+  // Pops whose key went stale are recognised by comparing with the stored distance.
+  std::vector<float>& dist = dijkstra_;
+  while (!heap_.empty()) {
+    std::pop_heap(heap_.begin(), heap_.end(), greater);
+    const std::uint32_t c = heap_.back();
+    heap_.pop_back();
+    const int ci = static_cast<int>(c % static_cast<std::uint32_t>(w)), cj = static_cast<int>(c / static_cast<std::uint32_t>(w));
+    for (int k = 0; k < 8; ++k) {
+      const int ni = ci + di[k], nj = cj + dj[k];
+      if (ni < 0 || nj < 0 || ni >= w || nj >= h) continue;
+      const std::size_t nc = static_cast<std::size_t>(nj) * static_cast<std::size_t>(w) + static_cast<std::size_t>(ni);
+      if (!free_[nc]) continue;
+      const float nd = dist[c] + step[k] * cell;
+      if (nd < dist[nc] && heap_.size() < heap_.capacity()) {
+        dist[nc] = nd;
+        // The way to G~ from nc starts towards c: remember that heading (world frame).
+        dijkstra_dir_[nc] = static_cast<float>(box_theta + std::atan2(static_cast<double>(-dj[k]), static_cast<double>(-di[k])));
+        heap_.push_back(static_cast<std::uint32_t>(nc));
+        std::push_heap(heap_.begin(), heap_.end(), greater);
+      }
+    }
+  }
+}
+
+double Heuristic::evaluateDijkstra(const UnicycleState& s) {
+  int i, j;
+  const Vec2 line[2] = {s.position(), goal_.position()};
+  if (map_ == nullptr || !map_->cellOf(s.position(), i, j)) {
+    return config_.unreachable_penalty_s + pathRtr(line, s.theta, goal_.theta, limits_);
+  }
+  const std::size_t c = static_cast<std::size_t>(j) * static_cast<std::size_t>(map_->width()) + static_cast<std::size_t>(i);
+  const float d = dijkstra_[c];
+  if (!std::isfinite(d)) return config_.unreachable_penalty_s + pathRtr(line, s.theta, goal_.theta, limits_);
+  // RTR on the Dijkstra path: turn towards its first step, drive its length, and turn to the
+  // goal heading (the path's last heading is unknown to a lookup table; the goal's is used).
+  const double dir = dijkstra_dir_[c];
+  const double fwd = std::abs(wrapAngle(dir - s.theta)) / limits_.w_max + d / limits_.v_max +
+                     std::abs(wrapAngle(goal_.theta - dir)) / limits_.w_max;
+  const double bwd = limits_.v_min < 0.0 ? std::abs(wrapAngle(dir + kPi - s.theta)) / limits_.w_max + d / -limits_.v_min +
+                                               std::abs(wrapAngle(goal_.theta - dir - kPi)) / limits_.w_max
+                                         : fwd;
+  return std::min(fwd, bwd);
+}
+
+}  // namespace staa

@@ -1,0 +1,87 @@
+#pragma once
+// The STAA* heuristics (paper, Sec. III-E-5 and IV-C):
+//  - Path RTR: the shortest path from the state to G~ (among the inflated static obstacles,
+//    plus the inflated predicted moving obstacles D'(t) for depths 1..3), driven as
+//    rotate-translate-rotate motions, forward or backward (Eq. 4, 5);
+//  - Path Euclidean: the same path's length over v_max;
+//  - Dijkstra RTR: a grid Dijkstra map from G~ over the local grid, looked up per state.
+//
+// Speed: every query of one cycle goes to the same G~ among the same obstacles, so each of
+// the four Minimal Construct searches (static, and t = 1, 2, 3 steps ahead) keeps its
+// backward search tree from G~ for the whole cycle. A query then connects the state to the
+// tree and rarely expands anything: the tree is the per-cycle structure all queries share.
+// The values are exactly the path-RTR values of the paper.
+
+#include "control/robot_profile.hpp"
+#include "local/dynamic_obstacles.hpp"
+#include "local/local_map.hpp"
+#include "path/minimal_construct.hpp"
+#include "planner/unicycle.hpp"
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace staa {
+
+enum class HeuristicKind : std::uint8_t { kPathRtr, kPathEuclid, kDijkstraRtr };
+const char* toString(HeuristicKind kind);
+bool parseHeuristicKind(const char* text, HeuristicKind& out);
+
+struct HeuristicConfig {
+  HeuristicKind kind = HeuristicKind::kPathRtr;
+  int dynamic_depth = 3;           // D'(t) is used up to this depth (the paper: 3)
+  double dynamic_inflation_m = 0.5;  // radius that grows D(t) into D'(t)
+  int arc_steps = 4;               // chords per corner of an inflated moving obstacle
+  double unreachable_penalty_s = 100.0;  // h when no path exists at all
+};
+
+// Rotate-translate-rotate time along a polyline from heading `start_theta` to final heading
+// `goal_theta`, each segment driven forward (v_max) or backward (|v_min|), whichever is
+// cheaper overall (a two-state dynamic programme over the segments).
+double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits);
+
+class Heuristic {
+ public:
+  // `inflated_static` is M' (the path planner's inflated obstacles), indexed once here.
+  Heuristic(const HeuristicConfig& config, const MotionLimits& limits, const std::vector<Polygon>& inflated_static,
+            const LocalMapConfig& local);
+
+  // Per cycle: the intermediate goal, the moving obstacles at the cycle's start, the step dt,
+  // and (for Dijkstra RTR) the local map. No allocation.
+  void prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map);
+
+  // h for a state at search depth `depth` (time depth * dt).
+  double evaluate(const UnicycleState& s, int depth);
+
+  const HeuristicConfig& config() const { return config_; }
+  std::uint64_t queries() const { return queries_; }
+  // The path of the last Path-RTR / Path-Euclid query (for drawing).
+  std::span<const Vec2> lastPath() const { return last_path_; }
+
+ private:
+  double evaluatePath(const UnicycleState& s, int depth);
+  double evaluateDijkstra(const UnicycleState& s);
+  void buildDijkstra(const LocalMap& map);
+
+  HeuristicConfig config_;
+  MotionLimits limits_;
+  Pose2 goal_;
+  MinimalConstruct static_search_;
+  std::array<MinimalConstruct, 3> dynamic_search_;
+  std::array<bool, 3> has_dynamic_{};
+  std::array<FixedPolygon, 3 * 32> inflated_{};
+  std::array<PolygonView, 32> views_{};
+  std::span<const Vec2> last_path_;
+  std::uint64_t queries_ = 0;
+
+  // Dijkstra RTR: distance (m) to G~ per local cell, and the descent direction per cell.
+  const LocalMap* map_ = nullptr;
+  std::vector<float> dijkstra_;
+  std::vector<float> dijkstra_dir_;
+  std::vector<std::uint32_t> heap_;
+  std::vector<std::uint8_t> free_;
+};
+
+}  // namespace staa

@@ -1,0 +1,206 @@
+#include "planner/staa_star.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace staa {
+
+const char* toString(PlanResult::Outcome outcome) {
+  switch (outcome) {
+    case PlanResult::Outcome::kFinished: return "finished";
+    case PlanResult::Outcome::kAborted: return "aborted";
+    case PlanResult::Outcome::kExhausted: return "exhausted";
+    case PlanResult::Outcome::kBrake: return "brake";
+  }
+  return "unknown";
+}
+
+Action brakeAction(const UnicycleState& s, const MotionLimits& limits, double dt) {
+  // Decelerate at the limits, but not past zero within dt (no reversing out of a brake).
+  auto towardsZero = [&](double vel, double acc_max) {
+    if (dt <= 0.0) return 0.0;
+    return std::clamp(-vel / dt, -acc_max, acc_max);
+  };
+  return Action{towardsZero(s.v, limits.a_max), towardsZero(s.w, limits.b_max)};
+}
+
+StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const std::vector<Polygon>& inflated_static,
+                   const LocalMapConfig& local)
+    : config_(config),
+      limits_(robot.limits),
+      actions_(robot.limits, config.notches),
+      collision_(robot, local.cell_m),
+      heuristic_(config.heuristic, robot.limits, inflated_static, local) {
+  nodes_.reserve(config_.max_nodes);
+  queue_.reserve(config_.max_nodes);
+  trajectory_.reserve(config_.max_nodes > 1024 ? 1024 : config_.max_nodes);
+  closed_w_ = static_cast<int>(std::ceil((local.ahead_m + local.behind_m) / config_.closed_xy_m));
+  closed_h_ = static_cast<int>(std::ceil(2.0 * local.side_m / config_.closed_xy_m));
+  closed_t_ = static_cast<int>(std::ceil(2.0 * kPi / config_.closed_theta_rad));
+  closed_.assign(static_cast<std::size_t>(closed_w_) * static_cast<std::size_t>(closed_h_) * static_cast<std::size_t>(closed_t_), 0);
+}
+
+// The closed table coincides with the local grid (paper, Sec. III-E-2): x and y in the box's
+// frame, heading in 0.1 rad bins. False for states outside the box.
+bool StaaStar::closedIndex(const UnicycleState& s, std::size_t& index) const {
+  const Vec2 local = map_->origin().inverseTransform(s.position());
+  const LocalMapConfig& lc = map_->config();
+  const int i = static_cast<int>(std::floor((local.x() + lc.behind_m) / config_.closed_xy_m));
+  const int j = static_cast<int>(std::floor((local.y() + lc.side_m) / config_.closed_xy_m));
+  if (i < 0 || j < 0 || i >= closed_w_ || j >= closed_h_) return false;
+  double th = std::fmod(s.theta, 2.0 * kPi);
+  if (th < 0.0) th += 2.0 * kPi;
+  const int t = std::min(static_cast<int>(th / config_.closed_theta_rad), closed_t_ - 1);
+  index = (static_cast<std::size_t>(t) * static_cast<std::size_t>(closed_h_) + static_cast<std::size_t>(j)) *
+              static_cast<std::size_t>(closed_w_) +
+          static_cast<std::size_t>(i);
+  return true;
+}
+
+void StaaStar::push(std::int32_t node) {
+  const Node& n = nodes_[static_cast<std::size_t>(node)];
+  queue_.push_back(QueueEntry{n.f, n.h, node});
+  // Min-heap on f; ties go to the lower h (closer to the goal), then the older node.
+  std::push_heap(queue_.begin(), queue_.end(), [](const QueueEntry& a, const QueueEntry& b) {
+    if (a.f != b.f) return a.f > b.f;
+    if (a.h != b.h) return a.h > b.h;
+    return a.node > b.node;
+  });
+}
+
+std::int32_t StaaStar::pop() {
+  std::pop_heap(queue_.begin(), queue_.end(), [](const QueueEntry& a, const QueueEntry& b) {
+    if (a.f != b.f) return a.f > b.f;
+    if (a.h != b.h) return a.h > b.h;
+    return a.node > b.node;
+  });
+  const std::int32_t n = queue_.back().node;
+  queue_.pop_back();
+  return n;
+}
+
+PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
+                          PlannerBudget budget) {
+  PlanResult result;
+  PlanStats& st = result.stats;
+  const std::int64_t t_begin = timing_ ? steadyClockNs() : 0;
+  budget.start();
+  map_ = &map;
+  collision_.prepare(map);
+  heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map);
+  nodes_.clear();
+  queue_.clear();
+  trajectory_.clear();
+  if (++generation_ == 0) {
+    std::fill(closed_.begin(), closed_.end(), 0);
+    generation_ = 1;
+  }
+
+  Node root;
+  root.s = start;
+  root.h = heuristic_.evaluate(start, 0);
+  root.f = root.h;
+  nodes_.push_back(root);
+  push(0);
+  std::int32_t best = 0;
+  result.outcome = PlanResult::Outcome::kExhausted;
+
+  while (!queue_.empty()) {
+    // Checked on every pop (paper, Sec. III-E-6).
+    if (budget.exhausted(st.pops)) {
+      result.outcome = PlanResult::Outcome::kAborted;
+      break;
+    }
+    const std::int32_t id = pop();
+    ++st.pops;
+    const Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool may be appended below
+    std::size_t cell = 0;
+    if (closedIndex(node.s, cell)) {
+      if (closed_[cell] == generation_) continue;  // its cell was closed by an earlier pop
+      closed_[cell] = generation_;
+    }
+    if (node.h < config_.finish_h) {
+      best = id;
+      result.outcome = PlanResult::Outcome::kFinished;
+      break;
+    }
+    ++st.expansions;
+    const int depth = node.depth + 1;
+    const double t0 = node.depth * config_.dt;
+    const bool predict = depth <= config_.prediction_depth;
+    for (std::size_t a = 0; a < actions_.size(); ++a) {
+      ++st.successors;
+      const ArcVelocities vel = arcVelocities(node.s, actions_[a], config_.dt, limits_);
+      const Pose2 end = poseAlongArc(node.s, vel.v_mid, vel.w_mid, config_.dt);
+      const UnicycleState child{end.x, end.y, end.theta, vel.v_end, vel.w_end};
+      std::size_t child_cell = 0;
+      if (!closedIndex(child, child_cell)) continue;   // outside the local map
+      if (closed_[child_cell] == generation_) continue;  // checked on push too
+      const std::int64_t tc = timing_ ? steadyClockNs() : 0;
+      bool free = config_.check_swept ? collision_.motionFreeStatic(node.s, vel, config_.dt)
+                                      : collision_.poseFreeStatic(end);
+      if (free && predict) {
+        free = config_.check_swept ? collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0)
+                                   : collision_.poseFreeDynamic(end, obstacles, t0 + config_.dt);
+      }
+      if (timing_) st.collision_ns += steadyClockNs() - tc;
+      if (!free) {
+        ++st.collisions;
+        continue;
+      }
+      if (nodes_.size() == nodes_.capacity()) break;  // pool full: no more pushes
+      // Eq. (3): time, costmap at the state, proximity to the predicted obstacles.
+      const double t = depth * config_.dt;
+      double g = t + config_.w_static * map.cost(child.position());
+      if (predict && obstacles.size() > 0) {
+        const double dist = collision_.distanceToDynamic(child.position(), obstacles, t);
+        g += config_.w_dynamic * std::max(1.0 - dist / config_.proximity_range_m, 0.0);
+      }
+      const std::int64_t th = timing_ ? steadyClockNs() : 0;
+      const double h = heuristic_.evaluate(child, depth);
+      if (timing_) st.heuristic_ns += steadyClockNs() - th;
+      ++st.heuristic_calls;
+      Node c;
+      c.s = child;
+      c.g = g;
+      c.h = h;
+      c.f = g + h;
+      c.parent = id;
+      c.depth = static_cast<std::uint16_t>(depth);
+      c.action = static_cast<std::uint8_t>(a);
+      nodes_.push_back(c);
+      const auto cid = static_cast<std::int32_t>(nodes_.size() - 1);
+      push(cid);
+      if (h < nodes_[static_cast<std::size_t>(best)].h) best = cid;
+    }
+  }
+
+  if (best == 0 && result.outcome != PlanResult::Outcome::kFinished) {
+    // Nothing beyond the start survived: every motion collides. Brake at the limits (the
+    // original only did so near the root; this acts whatever the search saw).
+    result.outcome = PlanResult::Outcome::kBrake;
+  }
+  const Node& b = nodes_[static_cast<std::size_t>(best)];
+  result.best = b.s;
+  result.best_h = b.h;
+  result.depth = b.depth;
+  // Follow the parents back to the first action; record the trajectory root..best.
+  std::int32_t first = best;
+  for (std::int32_t n = best; n != -1; n = nodes_[static_cast<std::size_t>(n)].parent) {
+    if (nodes_[static_cast<std::size_t>(n)].parent == 0) first = n;
+    if (trajectory_.size() < trajectory_.capacity()) trajectory_.push_back(nodes_[static_cast<std::size_t>(n)].s);
+  }
+  std::reverse(trajectory_.begin(), trajectory_.end());
+  result.trajectory = trajectory_;
+  if (best == 0) {
+    // At the goal already (finished at the root) or braking: decelerate towards standstill.
+    result.first_action = brakeAction(start, limits_, config_.dt);
+  } else {
+    result.first_action = actions_[nodes_[static_cast<std::size_t>(first)].action];
+  }
+  if (timing_) st.total_ns = steadyClockNs() - t_begin;
+  return result;
+}
+
+}  // namespace staa

@@ -1,0 +1,128 @@
+#pragma once
+// Short-Term Aborting A* (paper, Sec. III-E): an A* over acceleration commands from the
+// robot's current state towards the intermediate goal G~ that always returns within its
+// budget: on abort it returns the first action towards the state with the lowest heuristic
+// seen, it finishes early when a popped state is within h < 0.1 of G~, and it brakes when no
+// collision-free successor exists at all.
+//
+// All memory (node pool, queue, closed table) belongs to the planner and is sized at
+// construction; plan() allocates nothing.
+
+#include "control/robot_profile.hpp"
+#include "local/dynamic_obstacles.hpp"
+#include "local/local_map.hpp"
+#include "planner/budget.hpp"
+#include "planner/collision.hpp"
+#include "planner/heuristic.hpp"
+#include "planner/unicycle.hpp"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace staa {
+
+struct StaaConfig {
+  std::size_t notches = 7;          // Eq. (1): n, 49 actions
+  double dt = 0.3;                  // prediction time per step (s)
+  double closed_xy_m = 0.05;        // closed table: cell size ...
+  double closed_theta_rad = 0.1;    // ... and heading resolution
+  int prediction_depth = 3;         // D(t) is checked and costed up to this depth
+  double w_static = 1.0;            // Eq. (3): w_s, weight of the costmap C'
+  double w_dynamic = 1.0;           // Eq. (3): w_d, weight of the proximity to D(t)
+  double proximity_range_m = 1.0;   // Eq. (3): delta = max(1 - dist / range, 0)
+  double finish_h = 0.1;            // early finish below this h
+  bool check_swept = true;          // check the motion between poses, not only the end pose
+  std::size_t max_nodes = 100000;   // node pool (the search stops pushing when it is full)
+  HeuristicConfig heuristic;
+};
+
+struct PlanStats {
+  std::uint32_t pops = 0;         // queue pops, a pop of an already closed cell included
+  std::uint32_t expansions = 0;   // pops that expanded a node
+  std::uint32_t successors = 0;   // child states generated and checked (49 per expansion)
+  std::uint32_t collisions = 0;   // successors discarded by a collision
+  std::uint32_t heuristic_calls = 0;
+  std::int64_t heuristic_ns = 0;  // time in the heuristic (wall clock; 0 unless timing is on)
+  std::int64_t collision_ns = 0;
+  std::int64_t total_ns = 0;
+};
+
+struct PlanResult {
+  enum class Outcome : std::uint8_t {
+    kFinished,  // a popped state reached h < finish_h
+    kAborted,   // the budget ran out; the lowest-h state was taken
+    kExhausted, // the queue ran empty; the lowest-h state was taken
+    kBrake,     // no collision-free successor of the start at all: brake
+  };
+  Outcome outcome = Outcome::kBrake;
+  Action first_action;        // to apply until the next cycle
+  UnicycleState best;         // the state the plan leads to
+  double best_h = 0.0;
+  int depth = 0;              // depth of that state
+  PlanStats stats;
+  std::span<const UnicycleState> trajectory;  // root .. best, valid until the next plan()
+};
+
+const char* toString(PlanResult::Outcome outcome);
+
+// The deceleration at the limits towards standstill from (v, w): the brake.
+Action brakeAction(const UnicycleState& s, const MotionLimits& limits, double dt);
+
+class StaaStar {
+ public:
+  StaaStar(const StaaConfig& config, const RobotProfile& robot, const std::vector<Polygon>& inflated_static,
+           const LocalMapConfig& local);
+
+  // Plans from `start` (in the local map's frame: world) to the local map's G~. The local map
+  // must be updated for this cycle. `obstacles` holds D at the cycle's time (t = 0).
+  PlanResult plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
+                  PlannerBudget budget);
+
+  // Visits the search tree of the last plan (parent, child) for drawing.
+  template <typename Visitor>
+  void forEachEdge(Visitor&& visit) const {
+    for (std::size_t i = 1; i < nodes_.size(); ++i) visit(nodes_[static_cast<std::size_t>(nodes_[i].parent)].s, nodes_[i].s);
+  }
+
+  const StaaConfig& config() const { return config_; }
+  const ActionSet& actions() const { return actions_; }
+  Heuristic& heuristic() { return heuristic_; }
+  void setTiming(bool on) { timing_ = on; }
+
+ private:
+  struct Node {
+    UnicycleState s;
+    double g = 0.0;
+    double h = 0.0;
+    double f = 0.0;
+    std::int32_t parent = -1;
+    std::uint16_t depth = 0;
+    std::uint8_t action = 0;
+  };
+  struct QueueEntry {
+    double f;
+    double h;
+    std::int32_t node;
+  };
+
+  bool closedIndex(const UnicycleState& s, std::size_t& index) const;
+  void push(std::int32_t node);
+  std::int32_t pop();
+
+  StaaConfig config_;
+  MotionLimits limits_;
+  ActionSet actions_;
+  CollisionChecker collision_;
+  Heuristic heuristic_;
+  const LocalMap* map_ = nullptr;
+  std::vector<Node> nodes_;
+  std::vector<QueueEntry> queue_;
+  std::vector<std::uint32_t> closed_;  // generation stamps over (x, y, theta) cells
+  std::uint32_t generation_ = 0;
+  int closed_w_ = 0, closed_h_ = 0, closed_t_ = 0;
+  std::vector<UnicycleState> trajectory_;
+  bool timing_ = false;
+};
+
+}  // namespace staa

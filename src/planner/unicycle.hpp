@@ -1,0 +1,66 @@
+#pragma once
+// The unicycle state, the action set of accelerations and the arc prediction of the paper's
+// Sec. III-E-1 (Eq. 1 and 2).
+
+#include "control/robot_profile.hpp"
+#include "geometry/types.hpp"
+
+#include <array>
+#include <cstddef>
+
+namespace staa {
+
+// s = (x, y, theta, v, w).
+struct UnicycleState {
+  double x = 0.0;
+  double y = 0.0;
+  double theta = 0.0;
+  double v = 0.0;
+  double w = 0.0;
+
+  Vec2 position() const { return {x, y}; }
+  Pose2 pose() const { return {x, y, theta}; }
+};
+
+// An action: linear and angular acceleration (a, b), held for the prediction time.
+struct Action {
+  double a = 0.0;
+  double b = 0.0;
+};
+
+// Eq. (1): n x n accelerations spanning [-a_max, a_max] x [-b_max, b_max]. n = 7 gives the
+// paper's 49 actions; the middle one (i = j = (n-1)/2) is (0, 0) for odd n.
+class ActionSet {
+ public:
+  static constexpr std::size_t kMaxNotches = 15;
+
+  ActionSet() = default;
+  ActionSet(const MotionLimits& limits, std::size_t notches);
+
+  std::size_t size() const { return count_; }
+  const Action& operator[](std::size_t i) const { return actions_[i]; }
+  std::size_t notches() const { return notches_; }
+
+ private:
+  std::array<Action, kMaxNotches * kMaxNotches> actions_{};
+  std::size_t count_ = 0;
+  std::size_t notches_ = 0;
+};
+
+// Eq. (2): the state after applying (a, b) for dt, along an arc whose radius comes from the
+// velocities in the middle of the interval; the velocities are clamped to the limits (the
+// position uses the clamped mid-interval velocities too, so a clamped action does not
+// predict motion the robot cannot make).
+UnicycleState predictArc(const UnicycleState& s, const Action& action, double dt, const MotionLimits& limits);
+
+// The pose at time t in [0, dt] along the same motion (for checking the swept motion).
+Pose2 poseAlongArc(const UnicycleState& s, double v_mid, double w_mid, double t);
+
+// The velocities a state reaches from s under (a, b) after dt, clamped, and the mid-interval
+// velocities that drive the arc.
+struct ArcVelocities {
+  double v_end, w_end, v_mid, w_mid;
+};
+ArcVelocities arcVelocities(const UnicycleState& s, const Action& action, double dt, const MotionLimits& limits);
+
+}  // namespace staa
