@@ -1,5 +1,7 @@
 #include "control/control_cycle.hpp"
 
+#include "geometry/clipper_ops.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -25,8 +27,15 @@ namespace {
 double inflationFor(const ControlConfig& config, const RobotProfile& robot) {
   return config.inflation_m > 0.0 ? config.inflation_m : robot.circumradius();
 }
-StaaConfig staaFor(StaaConfig c, double inflation) {
-  c.heuristic.dynamic_inflation_m = inflation;
+double dynamicInflationFor(const ControlConfig& config, const RobotProfile& robot) {
+  if (config.dynamic_inflation_m > 0.0) return config.dynamic_inflation_m;
+  double half_width = 0.0;
+  for (const Vec2& p : robot.footprint) half_width = std::max(half_width, std::abs(p.y()));
+  return half_width + 0.05;
+}
+StaaConfig staaFor(StaaConfig c, double inflation, double dynamic_inflation) {
+  c.heuristic.static_inflation_m = inflation;
+  c.heuristic.dynamic_inflation_m = dynamic_inflation;
   return c;
 }
 }  // namespace
@@ -35,9 +44,13 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
     : config_(config),
       robot_(robot),
       inflation_(inflationFor(config, robot)),
+      dynamic_inflation_(dynamicInflationFor(config, robot)),
+      local_inflation_(config.local_inflation_m > 0.0 ? config.local_inflation_m : dynamic_inflation_),
       path_(map, pathOptions(config, inflation_)),
+      local_obstacles_(inflateEachToSimple(path_.realObstacles(), local_inflation_ + config.path.arc_tolerance_m,
+                                           config.path.arc_tolerance_m)),
       local_(config.local),
-      staa_(staaFor(config.staa, inflation_), robot, path_.inflatedObstacles(), config.local),
+      staa_(staaFor(config.staa, inflation_, dynamic_inflation_), robot, local_obstacles_, config.local),
       empty_obstacles_(1) {}
 
 void ControlCycle::setGoal(const Pose2& goal) {
@@ -71,7 +84,8 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   const double dist = (robot.position() - goal.position()).norm();
   const bool heading_ok = config_.goal_heading_tolerance > kPi ||
                           std::abs(wrapAngle(robot.theta - goal.theta)) <= config_.goal_heading_tolerance;
-  if (state_ == CycleState::kReached || (dist <= config_.goal_tolerance_m && heading_ok)) {
+  const bool slow = !config_.staa.heuristic.stop_at_goal || std::abs(robot.v) <= config_.goal_speed_tolerance;
+  if (state_ == CycleState::kReached || (dist <= config_.goal_tolerance_m && heading_ok && slow)) {
     state_ = CycleState::kReached;
     return stop(robot, state_);
   }
@@ -81,7 +95,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   std::int64_t t0 = steadyClockNs();
   const std::size_t n = std::min(obstacles.size(), views_.size());
   for (std::size_t i = 0; i < n; ++i) {
-    obstacles.predictInflated(i, 0.0, inflation_, config_.staa.heuristic.arc_steps, inflated_[i]);
+    obstacles.predictInflated(i, 0.0, dynamic_inflation_, config_.staa.heuristic.arc_steps, inflated_[i]);
     views_[i] = inflated_[i].view();
   }
   const GlobalPath path = n > 0 ? path_.plan(robot.position(), goal.position(), std::span<const PolygonView>(views_.data(), n))

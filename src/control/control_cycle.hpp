@@ -35,7 +35,20 @@ struct ControlConfig {
   double rate_hz = 30.0;
   double goal_tolerance_m = 0.2;        // position error that counts as arrived
   double goal_heading_tolerance = 0.4;  // rad; > pi ignores the heading
-  double inflation_m = 0.0;             // M' and D' growth; 0: the footprint's circumradius
+  // Arrival also needs the robot (nearly) stopped when the planner stops at goals
+  // (staa.heuristic.stop_at_goal); |v| at most this.
+  double goal_speed_tolerance = 0.25;
+  double inflation_m = 0.0;             // M' growth; 0: the footprint's circumradius
+  // D' growth (moving obstacles, for the paths only: collisions are checked exactly). 0: the
+  // footprint's half-width plus 5 cm. Passing a person, the robot drives alongside, not
+  // across: growing D' by the full circumradius would close every corridor a person walks in
+  // and leave the heuristic no way around them.
+  double dynamic_inflation_m = 0.0;
+  // Growth of the static obstacles for the STAA* heuristic's local paths (L). 0: as D'. The
+  // global path keeps the circumradius (it picks the route, in which any heading fits); the
+  // local paths only guide a search whose collisions are checked on the real footprint, and
+  // with the circumradius they could not pass a person in a 2 m corridor at all.
+  double local_inflation_m = 0.0;
   StaaConfig staa;
   LocalMapConfig local;
   GlobalPathOptions path;
@@ -78,6 +91,7 @@ class ControlCycle {
   const ControlConfig& config() const { return config_; }
   const RobotProfile& robot() const { return robot_; }
   double inflation() const { return inflation_; }
+  double dynamicInflation() const { return dynamic_inflation_; }
 
  private:
   CycleOutput stop(const UnicycleState& robot, CycleState state);
@@ -86,7 +100,10 @@ class ControlCycle {
   ControlConfig config_;
   RobotProfile robot_;
   double inflation_;
+  double dynamic_inflation_;
+  double local_inflation_;
   GlobalPathPlanner path_;
+  std::vector<Polygon> local_obstacles_;  // L: the real obstacles grown by local_inflation_
   LocalMap local_;
   StaaStar staa_;
   DynamicObstacleSet empty_obstacles_;

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace staa {
 
@@ -15,11 +17,30 @@ namespace {
 constexpr float kFar = 1e9f;
 }  // namespace
 
-CollisionChecker::CollisionChecker(const RobotProfile& robot, double cell_m) : footprint_(robot.footprint), cell_(cell_m) {
+CollisionChecker::CollisionChecker(const RobotProfile& robot, double cell_m, double dynamic_clearance_m)
+    : footprint_(robot.footprint), cell_(cell_m) {
   if (!isCounterClockwise(footprint_)) std::reverse(footprint_.begin(), footprint_.end());
+  if (footprint_.size() > placed_.size()) {
+    throw std::invalid_argument("robot footprint has " + std::to_string(footprint_.size()) + " vertices; at most " +
+                                std::to_string(placed_.size()) + " are supported");
+  }
   convex_ = isConvex(footprint_);
   circumradius_ = robot.circumradius();
   sample_step_ = 0.9 * cell_m;
+  // The mitred offset of each vertex: along the sum of its edges' outward normals, scaled so
+  // that both edges move out by the margin (the result contains the round offset).
+  dynamic_margin_ = sample_step_ + std::max(0.0, dynamic_clearance_m);
+  const std::size_t fn = footprint_.size();
+  footprint_dynamic_.resize(fn);
+  for (std::size_t i = 0; i < fn; ++i) {
+    const Vec2& prev = footprint_[(i + fn - 1) % fn];
+    const Vec2& cur = footprint_[i];
+    const Vec2& next = footprint_[(i + 1) % fn];
+    const Vec2 e1 = (cur - prev).normalized(), e2 = (next - cur).normalized();
+    const Vec2 n1{e1.y(), -e1.x()}, n2{e2.y(), -e2.x()};  // outward for counter-clockwise
+    const double denom = std::max(1.0 + n1.dot(n2), 0.25);  // caps the mitre of sharp corners
+    footprint_dynamic_[i] = cur + dynamic_margin_ * (n1 + n2) / denom;
+  }
 
   // Outline points: every vertex plus points along each edge, no two more than a sample
   // step apart.
@@ -168,13 +189,14 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
     const Vec2 shift = obstacles.velocity(k) * t;
     const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
     const double r = 0.5 * (o.box.max - o.box.min).norm();
-    if ((center - p).squaredNorm() > (r + circumradius_) * (r + circumradius_)) continue;
+    const double reach = r + circumradius_ + 2.0 * dynamic_margin_;
+    if ((center - p).squaredNorm() > reach * reach) continue;
     if (!placed) {
-      transformPolygon(footprint_, pose, placed_);
+      transformPolygon(footprint_dynamic_, pose, placed_);
       placed = true;
     }
     obstacles.predict(k, t, scratch_);
-    const PolygonView robot{placed_.data(), footprint_.size()};
+    const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
     if (convex_ ? convexIntersect(robot, scratch_.view()) : polygonsOverlap(robot, scratch_.view())) return false;
   }
   return true;
@@ -183,7 +205,11 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
 bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
                                          const DynamicObstacleSet& obstacles, double t0) const {
   if (obstacles.size() == 0) return true;
-  const int n = samplesFor(vel, dt);
+  // Enough samples that neither the robot nor the fastest obstacle moves more than a sample
+  // step between two of them.
+  double fastest = 0.0;
+  for (std::size_t k = 0; k < obstacles.size(); ++k) fastest = std::max(fastest, obstacles.velocity(k).norm());
+  const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
   for (int k = n; k >= 1; --k) {
     const double t = dt * k / n;
     if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t)) return false;

@@ -8,7 +8,9 @@
 // footprint's outline points (every 4.5 cm, finer than a cell, so no cell-wide wall slips
 // between two of them) and its centroid. Dynamic obstacles: the footprint polygon against the
 // predicted polygons D(t) (SAT for convex footprints, the exact overlap test otherwise),
-// after a bounding-circle test.
+// after a bounding-circle test. Samples along a motion are close enough that neither the
+// robot nor an obstacle moves more than a sample step between two of them, and the footprint
+// checked against D(t) is grown by that step, so a contact between samples is not missed.
 
 #include "control/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
@@ -26,7 +28,9 @@ class CollisionChecker {
   static constexpr std::size_t kMaxCircles = 8;
   static constexpr std::size_t kMaxOutline = 256;
 
-  CollisionChecker(const RobotProfile& robot, double cell_m);
+  // `dynamic_clearance_m`: a gap kept to moving obstacles on top of what makes the sampled
+  // motion check conservative (the footprint is grown by the sample step plus this).
+  CollisionChecker(const RobotProfile& robot, double cell_m, double dynamic_clearance_m = 0.02);
 
   // Per cycle: the distance field of the local map's grid.
   void prepare(const LocalMap& map);
@@ -74,6 +78,8 @@ class CollisionChecker {
   int grid_w_ = 0, grid_h_ = 0;
   double gxx_ = 0.0, gxy_ = 0.0, gx0_ = 0.0, gyx_ = 0.0, gyy_ = 0.0, gy0_ = 0.0;
   Polygon footprint_;
+  Polygon footprint_dynamic_;  // grown by dynamic_margin_ (mitred): checked against D(t)
+  double dynamic_margin_ = 0.0;
   bool convex_ = true;
   double cell_ = 0.05;
   double circumradius_ = 0.0;

@@ -92,6 +92,7 @@ Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, 
 void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map) {
   goal_ = goal;
   map_ = &map;
+  final_goal_ = map.intermediateGoal().is_final;
   const std::size_t n = std::min(obstacles.size(), views_.size());
   for (int k = 0; k < 3; ++k) {
     has_dynamic_[static_cast<std::size_t>(k)] = k < config_.dynamic_depth && n > 0;
@@ -108,8 +109,13 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
 
 double Heuristic::evaluate(const UnicycleState& s, int depth) {
   ++queries_;
-  if (config_.kind == HeuristicKind::kDijkstraRtr) return evaluateDijkstra(s);
-  return evaluatePath(s, depth);
+  const double h = config_.kind == HeuristicKind::kDijkstraRtr ? evaluateDijkstra(s) : evaluatePath(s, depth);
+  if (!(config_.stop_at_goal && final_goal_)) return h;
+  // The time braking takes beyond covering the same distance at the top speed the RTR time
+  // assumes: |v|/a - v^2/(2 a v_top). Zero when standing, v_top/(2a) at full speed.
+  auto braking = [](double vel, double acc, double top) { return std::abs(vel) / acc - vel * vel / (2.0 * acc * top); };
+  const double v_top = s.v >= 0.0 ? limits_.v_max : -limits_.v_min;
+  return h + braking(s.v, limits_.a_max, v_top) + braking(s.w, limits_.b_max, limits_.w_max);
 }
 
 double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
@@ -135,7 +141,7 @@ void Heuristic::buildDijkstra(const LocalMap& map) {
   const int w = map.width(), h = map.height();
   // Free cells: farther from every occupied cell than the robot's radius.
   conservativeDistanceField(map.grid(), w, h, map.config().cell_m, dijkstra_);
-  for (std::size_t i = 0; i < free_.size(); ++i) free_[i] = dijkstra_[i] >= config_.dynamic_inflation_m ? 1 : 0;
+  for (std::size_t i = 0; i < free_.size(); ++i) free_[i] = dijkstra_[i] >= config_.static_inflation_m ? 1 : 0;
   const float inf = std::numeric_limits<float>::infinity();
   std::fill(dijkstra_.begin(), dijkstra_.end(), inf);
   heap_.clear();

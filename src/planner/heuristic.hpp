@@ -32,9 +32,14 @@ bool parseHeuristicKind(const char* text, HeuristicKind& out);
 struct HeuristicConfig {
   HeuristicKind kind = HeuristicKind::kPathRtr;
   int dynamic_depth = 3;           // D'(t) is used up to this depth (the paper: 3)
-  double dynamic_inflation_m = 0.5;  // radius that grows D(t) into D'(t)
+  double dynamic_inflation_m = 0.3;  // radius that grows D(t) into D'(t)
+  double static_inflation_m = 0.5;   // the robot's radius (Dijkstra RTR: cells this close to C are blocked)
   int arc_steps = 4;               // chords per corner of an inflated moving obstacle
   double unreachable_penalty_s = 100.0;  // h when no path exists at all
+  // At the final goal (G~ = G) the robot should stand, not drive through: add the extra time
+  // that braking to a stop takes, so that "h < 0.1" also means "almost stopped". The
+  // paper's experiment only counts a goal passed within 0.5 m and leaves this out.
+  bool stop_at_goal = true;
 };
 
 // Rotate-translate-rotate time along a polyline from heading `start_theta` to final heading
@@ -54,6 +59,8 @@ class Heuristic {
 
   // h for a state at search depth `depth` (time depth * dt).
   double evaluate(const UnicycleState& s, int depth);
+  // Whether the goal of this cycle is the final goal (set by prepare from the local map).
+  bool finalGoal() const { return final_goal_; }
 
   const HeuristicConfig& config() const { return config_; }
   std::uint64_t queries() const { return queries_; }
@@ -68,6 +75,7 @@ class Heuristic {
   HeuristicConfig config_;
   MotionLimits limits_;
   Pose2 goal_;
+  bool final_goal_ = false;
   MinimalConstruct static_search_;
   std::array<MinimalConstruct, 3> dynamic_search_;
   std::array<bool, 3> has_dynamic_{};

@@ -1,0 +1,457 @@
+// staa-sim: the simulator (ARCHITECTURE.md section 6). Runs the real control cycle against a
+// simulated world: one robot from a start to a goal in a polygon map (--map/--start/--goal) or
+// in a scenario among scripted movers (--scenario). Multi-agent runs and `experiment` come in
+// later issues; their options are accepted only where the value means one robot.
+// Exit status: 0 on a completed run (reached or not), 2 on bad input with one line on stderr
+// naming the option or file and the value, 1 on an unexpected failure during the run.
+
+#include "control/control_cycle.hpp"
+#include "control/robot_profile.hpp"
+#include "geometry/polygon.hpp"
+#include "map/polygon_map.hpp"
+#include "planner/heuristic.hpp"
+#include "sim/footprint.hpp"
+#include "sim/scenario.hpp"
+#include "sim/sim_runner.hpp"
+#include "sim/world.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using staa::Pose2;
+using staa::Vec2;
+using Json = nlohmann::ordered_json;
+
+constexpr int kExitBadInput = 2;
+constexpr int kExitRunFailed = 1;
+
+// The paper's wall-clock budget: 19 ms of a 33 ms period at 30 Hz; other rates scale it.
+constexpr double kDefaultBudgetMsAt30Hz = 19.0;
+
+// Bad command-line input: what() is the whole message after "staa-sim: ".
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// ---- parsing of values (std::from_chars: no locale, no trailing garbage) ----
+
+std::optional<double> parseDouble(std::string_view text) {
+  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  double v = 0.0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, v);
+  if (ec != std::errc{} || ptr != end || text.empty() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::optional<std::uint64_t> parseUnsigned(std::string_view text) {
+  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  std::uint64_t v = 0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, v);
+  if (ec != std::errc{} || ptr != end || text.empty()) return std::nullopt;
+  return v;
+}
+
+double parsePositive(const std::string& option, const std::string& text, std::string_view what) {
+  const auto v = parseDouble(text);
+  if (!v || *v <= 0.0) {
+    throw InputError(option + ": expected " + std::string(what) + " (a finite number > 0), got '" + text + "'");
+  }
+  return *v;
+}
+
+std::uint64_t parseCount(const std::string& option, const std::string& text, std::uint64_t min, std::uint64_t max,
+                         std::string_view what) {
+  const auto v = parseUnsigned(text);
+  if (!v || *v < min || *v > max) {
+    throw InputError(option + ": expected " + std::string(what) + " (an integer from " + std::to_string(min) +
+                     " to " + std::to_string(max) + "), got '" + text + "'");
+  }
+  return *v;
+}
+
+// "X,Y,TH": three finite numbers, metres and radians.
+Pose2 parsePose(const std::string& option, const std::string& text) {
+  std::vector<std::string_view> parts;
+  std::string_view rest(text);
+  for (std::size_t comma; (comma = rest.find(',')) != std::string_view::npos;) {
+    parts.push_back(rest.substr(0, comma));
+    rest.remove_prefix(comma + 1);
+  }
+  parts.push_back(rest);
+  if (parts.size() == 3) {
+    const auto x = parseDouble(parts[0]), y = parseDouble(parts[1]), th = parseDouble(parts[2]);
+    if (x && y && th) return Pose2{*x, *y, *th};
+  }
+  throw InputError(option + ": expected X,Y,TH (three finite numbers: metres, metres, radians), got '" + text + "'");
+}
+
+// ---- output helpers ----
+
+std::string fmt(double v, int decimals = 2) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(decimals);
+  s << v;
+  return s.str();
+}
+
+std::string fmtPose(const Pose2& p) { return "(" + fmt(p.x) + ", " + fmt(p.y) + ", " + fmt(p.theta) + ")"; }
+
+Json distributionJson(const staa::Distribution& d, bool with_mean, bool with_max) {
+  Json j;
+  if (with_mean) j["mean"] = d.mean;
+  j["p50"] = d.p50;
+  j["p99"] = d.p99;
+  if (with_max) j["max"] = d.max;
+  return j;
+}
+
+// ---- the request ----
+
+struct Request {
+  staa::Scenario scenario;
+  std::string map_label;  // the map file as given (or as the scenario resolved it)
+  std::string scenario_file;
+  std::string controller;
+  std::string mode;
+  int agents = 1;
+  std::uint64_t seed = 1;
+  staa::SimOptions options;
+  staa::HeuristicKind heuristic = staa::HeuristicKind::kPathRtr;
+  std::string json_file;
+  bool quiet = false;
+};
+
+// The start must leave the whole footprint free (World::collides: obstacles, movers, bounds);
+// the message names what it hits.
+void checkStart(const staa::Scenario& sc, const std::string& where) {
+  const staa::World world(sc);
+  if (!world.collides(sc.start)) return;
+  const staa::Polygon body = staa::footprintAt(sc.robot.footprint, sc.start);
+  std::string what = "touches a mover";
+  for (std::size_t i = 0; i < sc.map.obstacles.size(); ++i) {
+    if (staa::polygonDistance(body, sc.map.obstacles[i]) == 0.0) {
+      what = "overlaps obstacle " + std::to_string(i) + " of the map";
+      break;
+    }
+  }
+  if (sc.map.bounds) {
+    for (const Vec2& p : body) {
+      if (!(p.x() > sc.map.bounds->min.x() && p.x() < sc.map.bounds->max.x() && p.y() > sc.map.bounds->min.y() &&
+            p.y() < sc.map.bounds->max.y())) {
+        what = "reaches the map bounds";
+      }
+    }
+  }
+  throw InputError(where + " " + fmtPose(sc.start) + ": the robot's footprint (" + sc.robot.name + ") " + what);
+}
+
+// A goal inside (or on) an obstacle or outside the bounds is rejected (ARCHITECTURE.md 2.1).
+void checkGoal(const staa::Scenario& sc, const std::string& where) {
+  const Vec2 g = sc.goal.position();
+  const auto& b = sc.map.bounds;
+  if (b && !(g.x() > b->min.x() && g.x() < b->max.x() && g.y() > b->min.y() && g.y() < b->max.y())) {
+    throw InputError(where + " " + fmtPose(sc.goal) + ": outside the map bounds [" + fmt(b->min.x()) + ", " +
+                     fmt(b->min.y()) + ", " + fmt(b->max.x()) + ", " + fmt(b->max.y()) + "]");
+  }
+  for (std::size_t i = 0; i < sc.map.obstacles.size(); ++i) {
+    if (staa::locatePoint(g, sc.map.obstacles[i]) != staa::Containment::kOutside) {
+      throw InputError(where + " " + fmtPose(sc.goal) + ": inside obstacle " + std::to_string(i) + " of the map");
+    }
+  }
+}
+
+// ---- the run ----
+
+Json resultJson(const Request& rq, const staa::SimResult& r) {
+  const auto& o = rq.options;
+  Json j;
+  j["map"] = rq.map_label;
+  j["scenario"] = rq.scenario_file.empty() ? Json(nullptr) : Json(rq.scenario_file);
+  j["robot"] = rq.scenario.robot.name;
+  j["controller"] = rq.controller;
+  j["mode"] = rq.mode;
+  j["agents"] = rq.agents;
+  j["seed"] = rq.seed;
+  j["rate_hz"] = o.rate_hz;
+  j["duration_s"] = o.duration_s;
+  j["budget"] = o.budget_expansions ? Json{{"kind", "expansions"}, {"value", *o.budget_expansions}}
+                                    : Json{{"kind", "wall_ms"}, {"value", o.budget_ms}};
+  j["heuristic"] = staa::toString(rq.heuristic);
+  const Pose2& s = rq.scenario.start;
+  const Pose2& g = rq.scenario.goal;
+  j["start"] = Json::array({s.x, s.y, s.theta});
+  j["goal"] = Json::array({g.x, g.y, g.theta});
+  j["movers"] = rq.scenario.movers.size();
+
+  j["goals_reached"] = r.goals_reached;
+  j["collisions"] = r.collisions;
+  j["score"] = r.goals_reached - r.collisions;
+  j["reached_goal"] = r.reached_goal;
+  j["time_to_goal_s"] = r.time_to_goal_s;
+  // Infinite only in an unbounded, empty world: JSON has no infinity, so null.
+  j["min_clearance_m"] = std::isfinite(r.min_clearance_m) ? Json(r.min_clearance_m) : Json(nullptr);
+
+  Json planner;
+  planner["calls"] = r.calls;
+  planner["expansions"] = distributionJson(r.expansions, true, false);
+  planner["successors"] = distributionJson(r.successors, true, false);
+  planner["finished_early_ratio"] = r.finished_early_ratio;
+  planner["depth_mean"] = r.depth.mean;
+  planner["plan_us"] = distributionJson(r.plan_us, false, true);
+  j["planner"] = std::move(planner);
+  j["cycle_us"] = distributionJson(r.cycle_us, false, true);
+  j["path_us"] = distributionJson(r.path_us, false, true);
+  j["brakes"] = r.brakes;
+  j["final_state"] = r.final_state;
+  j["final_pose"] = Json::array({r.final_pose.x, r.final_pose.y, r.final_pose.theta});
+  j["simulated_s"] = r.duration_s;
+  j["frames_written"] = r.frames_written;
+  return j;
+}
+
+std::string summary(const staa::SimResult& r) {
+  std::ostringstream s;
+  if (r.reached_goal) {
+    s << "reached goal in " << fmt(r.time_to_goal_s) << " s";
+  } else {
+    s << "goal not reached after " << fmt(r.duration_s) << " s (state " << r.final_state << ")";
+  }
+  s << "; collisions " << r.collisions << "; min clearance "
+    << (std::isfinite(r.min_clearance_m) ? fmt(r.min_clearance_m, 3) + " m" : std::string("inf")) << "; planner "
+    << r.calls << " calls, pops mean " << fmt(r.expansions.mean, 1) << ", plan p50 " << fmt(r.plan_us.p50 * 1e-3, 3)
+    << " ms p99 " << fmt(r.plan_us.p99 * 1e-3, 3) << " ms";
+  if (r.brakes > 0) s << ", " << r.brakes << " brakes";
+  if (r.frames_written > 0) s << "; " << r.frames_written << " frames";
+  return s.str();
+}
+
+int simulate(Request& rq) {
+  // Open the output first: a bad --json path fails before a long run, not after it.
+  std::ofstream json_out;
+  if (!rq.json_file.empty()) {
+    json_out.open(rq.json_file, std::ios::binary | std::ios::trunc);
+    if (!json_out) throw InputError("--json: cannot write '" + rq.json_file + "'");
+  }
+  if (!rq.options.svg_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(rq.options.svg_dir, ec);
+    if (ec || !fs::is_directory(rq.options.svg_dir)) {
+      throw InputError("--svg: cannot create the directory '" + rq.options.svg_dir.string() + "'" +
+                       (ec ? " (" + ec.message() + ")" : std::string()));
+    }
+  }
+
+  if (!rq.quiet) {
+    const auto& o = rq.options;
+    std::cerr << "staa-sim: " << rq.scenario.name << ": " << fmtPose(rq.scenario.start) << " -> "
+              << fmtPose(rq.scenario.goal) << ", " << rq.scenario.movers.size()
+              << (rq.scenario.movers.size() == 1 ? " mover, " : " movers, ") << rq.controller
+              << " (" << staa::toString(rq.heuristic) << ", "
+              << (o.budget_expansions ? std::to_string(*o.budget_expansions) + " expansions"
+                                      : fmt(o.budget_ms, 2) + " ms")
+              << " per cycle), " << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
+    // One line per simulated second; the callback runs outside the timed cycle.
+    const double rate = o.rate_hz;
+    rq.options.on_cycle = [rate, last = 0L](const staa::World& world, const staa::CycleOutput& out,
+                                            int cycle) mutable {
+      const long second = static_cast<long>(std::floor(static_cast<double>(cycle) / rate + 1e-9));
+      if (second <= last) return;
+      last = second;
+      const staa::RobotState& rs = world.robot();
+      std::fprintf(stderr, "t=%.1fs pos=(%.2f,%.2f) v=%.2f state=%s\n", world.time(), rs.pose.x, rs.pose.y, rs.v,
+                   staa::toString(out.state));
+    };
+  }
+
+  staa::SimResult result;
+  try {
+    result = staa::runSingleRobot(rq.scenario, rq.options);
+  } catch (const std::exception& e) {
+    std::cerr << "staa-sim: the run failed: " << e.what() << '\n';
+    return kExitRunFailed;
+  }
+
+  if (json_out.is_open()) {
+    json_out << resultJson(rq, result).dump(2) << '\n';
+    json_out.close();
+    if (!json_out) throw InputError("--json: cannot write '" + rq.json_file + "'");
+  }
+  std::cout << summary(result) << '\n';
+  return 0;
+}
+
+// ---- command line ----
+
+int run(int argc, char** argv) {
+  if (argc > 1 && std::string_view(argv[1]) == "experiment") {
+    throw InputError("'staa-sim experiment' is not available yet (a later issue); run one robot with "
+                     "--map MAP --start X,Y,TH --goal X,Y,TH or --scenario FILE");
+  }
+
+  CLI::App app{"staa-sim: run the STAA* control cycle against a simulated world: one robot from --start to "
+               "--goal in a polygon map, or a scenario among scripted movers. Exit 0 on a completed run "
+               "(reached or not), 2 on bad input."};
+  std::string map_file, scenario_file, robot_file, start_text, goal_text, controller = "staa", mode = "cooperative",
+              agents_text = "1", duration_text = "60", rate_text = "30", seed_text = "1", budget_ms_text,
+              budget_exp_text, heuristic_text = "path-rtr", json_file, svg_dir, svg_every_text = "15";
+  bool quiet = false;
+
+  app.add_option("--map", map_file, "Polygon map (staa-polygon-map/1 YAML)");
+  app.add_option("--scenario", scenario_file, "Scenario (staa-scenario/1 YAML): map, robot, start, goal, movers");
+  app.add_option("--start", start_text, "Start pose X,Y,TH (metres, radians)");
+  app.add_option("--goal", goal_text, "Goal pose X,Y,TH (metres, radians)");
+  app.add_option("--robot", robot_file, "Robot profile (staa-robot/1 YAML; default: the paper's agent, or the "
+                                        "scenario's profile)");
+  app.add_option("--controller", controller, "staa, dwa or pd (only staa is available yet)")->capture_default_str();
+  app.add_option("--mode", mode, "cooperative or ghost (with one agent both are the same)")->capture_default_str();
+  app.add_option("--agents", agents_text, "Number of agents (only 1 is available yet)")->capture_default_str();
+  app.add_option("--duration", duration_text, "Simulated seconds")->capture_default_str();
+  app.add_option("--rate", rate_text, "Control rate in Hz")->capture_default_str();
+  app.add_option("--seed", seed_text, "Seed (recorded in the JSON; single-robot runs are deterministic)")
+      ->capture_default_str();
+  app.add_option("--budget-ms", budget_ms_text, "Wall-clock STAA* budget per cycle in ms (default 19 ms at 30 Hz, "
+                                                "scaled with the rate)");
+  app.add_option("--budget-expansions", budget_exp_text,
+                 "STAA* budget per cycle in queue pops: a bit-for-bit reproducible run");
+  app.add_option("--heuristic", heuristic_text, "path-rtr, path-euclid or dijkstra-rtr")->capture_default_str();
+  app.add_option("--json", json_file, "Write the results as JSON to this file");
+  app.add_option("--svg", svg_dir, "Write frames (frame_NNNNN.svg) like the paper's Fig. 1 into this directory");
+  app.add_option("--svg-every", svg_every_text, "Cycles between frames")->capture_default_str();
+  app.add_flag("--quiet", quiet, "No progress on stderr (the summary line on stdout remains)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "staa-sim: " << e.what() << " (see staa-sim --help)\n";
+    return kExitBadInput;
+  }
+
+  Request rq;
+  rq.quiet = quiet;
+
+  // What is not implemented yet is refused by name before anything is loaded.
+  if (controller == "dwa" || controller == "pd") {
+    throw InputError("--controller: controller '" + controller + "' is not available yet (issue 4)");
+  }
+  if (controller != "staa") {
+    throw InputError("--controller: expected staa, dwa or pd, got '" + controller + "'");
+  }
+  rq.controller = controller;
+  if (mode != "cooperative" && mode != "ghost") {
+    throw InputError("--mode: expected cooperative or ghost, got '" + mode + "'");
+  }
+  rq.mode = mode;
+  rq.agents = static_cast<int>(parseCount("--agents", agents_text, 1, 1000, "a number of agents"));
+  if (rq.agents != 1) {
+    throw InputError("--agents: " + agents_text +
+                     " agents are not available yet: only a single robot (--agents 1) runs now; multi-agent "
+                     "simulation comes in a later issue");
+  }
+  if (!staa::parseHeuristicKind(heuristic_text.c_str(), rq.heuristic)) {
+    throw InputError("--heuristic: expected path-rtr, path-euclid or dijkstra-rtr, got '" + heuristic_text + "'");
+  }
+
+  staa::SimOptions& o = rq.options;
+  o.duration_s = parsePositive("--duration", duration_text, "simulated seconds");
+  o.rate_hz = parsePositive("--rate", rate_text, "a control rate in Hz");
+  if (o.duration_s * o.rate_hz > 1e8) {
+    throw InputError("--duration " + duration_text + " at --rate " + rate_text + " is more than 1e8 cycles");
+  }
+  rq.seed = parseCount("--seed", seed_text, 0, std::numeric_limits<std::uint64_t>::max(), "a seed");
+  if (!budget_ms_text.empty() && !budget_exp_text.empty()) {
+    throw InputError("--budget-ms " + budget_ms_text + " and --budget-expansions " + budget_exp_text +
+                     " exclude each other: give a wall-clock budget or an expansion budget, not both");
+  }
+  if (!budget_exp_text.empty()) {
+    o.budget_expansions = static_cast<std::uint32_t>(parseCount(
+        "--budget-expansions", budget_exp_text, 1, std::numeric_limits<std::uint32_t>::max(), "queue pops per cycle"));
+  } else if (!budget_ms_text.empty()) {
+    o.budget_ms = parsePositive("--budget-ms", budget_ms_text, "milliseconds per cycle");
+  } else {
+    o.budget_ms = kDefaultBudgetMsAt30Hz * 30.0 / o.rate_hz;
+  }
+  o.svg_every = static_cast<int>(parseCount("--svg-every", svg_every_text, 1, 1'000'000, "cycles between frames"));
+  o.svg_dir = svg_dir;
+  o.control.rate_hz = o.rate_hz;
+  o.control.staa.heuristic.kind = rq.heuristic;
+  rq.json_file = json_file;
+
+  if (!scenario_file.empty()) {
+    for (const auto& [name, text] : {std::pair<const char*, const std::string&>{"--map", map_file},
+                                     {"--start", start_text},
+                                     {"--goal", goal_text}}) {
+      if (!text.empty()) {
+        throw InputError(std::string(name) + " '" + text + "' cannot be combined with --scenario " + scenario_file +
+                         " (the scenario names its map, start and goal)");
+      }
+    }
+    rq.scenario = staa::loadScenario(scenario_file);
+    rq.scenario_file = scenario_file;
+    rq.map_label = rq.scenario.map_path.string();
+    if (!robot_file.empty()) {
+      rq.scenario.robot = staa::loadRobotProfile(robot_file);
+      rq.scenario.profile_path = robot_file;
+      checkStart(rq.scenario, "--robot " + robot_file + ": the scenario's start");
+    }
+  } else {
+    if (map_file.empty()) throw InputError("--map or --scenario is required (see staa-sim --help)");
+    if (start_text.empty() || goal_text.empty()) {
+      throw InputError(std::string(start_text.empty() ? "--start" : "--goal") +
+                       " is required with --map (a single robot drives from --start X,Y,TH to --goal X,Y,TH)");
+    }
+    staa::Scenario& sc = rq.scenario;
+    sc.start = parsePose("--start", start_text);
+    sc.goal = parsePose("--goal", goal_text);
+    sc.map = staa::loadPolygonMap(map_file);
+    sc.map_path = map_file;
+    sc.name = sc.map.name.empty() ? fs::path(map_file).stem().string() : sc.map.name;
+    if (robot_file.empty()) {
+      sc.robot = staa::paperAgentProfile();
+    } else {
+      sc.robot = staa::loadRobotProfile(robot_file);
+      sc.profile_path = robot_file;
+    }
+    rq.map_label = map_file;
+    checkStart(sc, "--start");
+    checkGoal(sc, "--goal");
+  }
+  return simulate(rq);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Every failure is one line on stderr and a non-zero exit status, never an uncaught exception.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "staa-sim: " << e.what() << '\n';
+  } catch (...) {
+    std::cerr << "staa-sim: unexpected error\n";
+  }
+  return kExitBadInput;
+}
