@@ -53,6 +53,8 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   covering_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
   pending_.clear();
   pending_.reserve(static_.polygonCount() + options_.max_dynamic_polygons);
+  rediscover_.clear();
+  rediscover_.reserve(static_.polygonCount());
   std::size_t slots = 1024;
   while (slots < 4 * max_nodes) slots *= 2;
   blocked_keys_.assign(slots, 0);
@@ -177,16 +179,30 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   blocked_count_ = 0;
   total_discovered_ = 0;
   nodes_.push_back(Node{});  // 0: the goal, root of the backward search
+  // The kept polygons join the new graph: list them, clear the marks, discover them again
+  // (discovering one may bring in others, which are then not added twice).
+  rediscover_.clear();
   for (std::size_t k = 0; k < static_discovered_.size(); ++k) {
-    if (static_discovered_[k]) {
-      static_discovered_[k] = 0;  // discoverPolygon sets it again and adds the corners
-      discoverPolygon(static_cast<std::uint32_t>(k), with_dynamic);
-    }
+    if (static_discovered_[k]) rediscover_.push_back(static_cast<std::uint32_t>(k));
   }
+  std::fill(static_discovered_.begin(), static_discovered_.end(), 0);
+  for (const std::uint32_t k : rediscover_) discoverPolygon(k, with_dynamic);
+}
+
+bool MinimalConstruct::markDiscovered(std::uint32_t global_polygon) {
+  const auto ns_poly = static_cast<std::uint32_t>(static_.polygonCount());
+  std::uint8_t& flag = global_polygon < ns_poly ? static_discovered_[global_polygon]
+                                                : dynamic_discovered_[global_polygon - ns_poly];
+  if (flag) return false;
+  flag = 1;
+  ++total_discovered_;
+  return true;
 }
 
 void MinimalConstruct::discoverPolygon(std::uint32_t global_polygon, bool with_dynamic) {
-  // A worklist, not recursion: overlapping polygons can form long chains.
+  // A worklist, not recursion: overlapping polygons can form long chains. A polygon is marked
+  // when it is queued, so it is queued once and the list never outgrows its reserve.
+  if (!markDiscovered(global_polygon)) return;
   pending_.push_back(global_polygon);
   while (!pending_.empty()) {
     const std::uint32_t k = pending_.back();
@@ -199,10 +215,6 @@ void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynam
   const auto ns_poly = static_cast<std::uint32_t>(static_.polygonCount());
   const bool is_static = global_polygon < ns_poly;
   const std::uint32_t local = is_static ? global_polygon : global_polygon - ns_poly;
-  std::uint8_t& flag = is_static ? static_discovered_[local] : dynamic_discovered_[local];
-  if (flag) return;
-  flag = 1;
-  ++total_discovered_;
   const PolygonSet& set = is_static ? static_ : dynamic_;
   const PolygonView poly = set.polygon(local);
   const std::size_t first = static_cast<std::size_t>(poly.data() - &set.vertex(0));
@@ -219,20 +231,20 @@ void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynam
     if (is_static) {
       for (std::uint32_t j = static_cover_offsets_[v]; j < static_cover_offsets_[v + 1]; ++j) {
         covered = true;
-        if (!static_discovered_[static_cover_[j]]) pending_.push_back(static_cover_[j]);
+        if (markDiscovered(static_cover_[j])) pending_.push_back(static_cover_[j]);
       }
     } else {
       const std::size_t n = static_.coveringPolygons(p, kNoPolygon, covering_);
       for (std::size_t j = 0; j < n; ++j) {
         covered = true;
-        if (!static_discovered_[covering_[j]]) pending_.push_back(covering_[j]);
+        if (markDiscovered(covering_[j])) pending_.push_back(covering_[j]);
       }
     }
     if (with_dynamic) {
       const std::size_t n = dynamic_.coveringPolygons(p, is_static ? kNoPolygon : local, covering_);
       for (std::size_t j = 0; j < n; ++j) {
         covered = true;
-        if (!dynamic_discovered_[covering_[j]]) pending_.push_back(covering_[j] + ns_poly);
+        if (markDiscovered(covering_[j] + ns_poly)) pending_.push_back(covering_[j] + ns_poly);
       }
     }
     if (covered) continue;

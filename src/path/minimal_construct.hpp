@@ -115,6 +115,7 @@ class MinimalConstruct {
   // cover one of its corners are discovered with it (they shape the free space there).
   void discoverPolygon(std::uint32_t global_polygon, bool with_dynamic);
   void discoverOne(std::uint32_t global_polygon, bool with_dynamic);
+  bool markDiscovered(std::uint32_t global_polygon);  // false when it already was
   bool canFollow(std::int32_t from, std::int32_t to) const;
   void relax(std::int32_t from, std::int32_t to);
   void expand(std::int32_t v);
@@ -151,6 +152,7 @@ class MinimalConstruct {
   std::vector<std::uint8_t> dynamic_discovered_;
   std::vector<std::uint32_t> blockers_;
   std::vector<std::uint32_t> pending_;   // polygons waiting to be discovered
+  std::vector<std::uint32_t> rediscover_;  // kept polygons, while a new graph is started
   std::vector<std::uint32_t> covering_;
   mutable bool overflow_ = false;
   // Per static vertex: the other static polygons that contain it (CSR), computed once.

@@ -17,8 +17,13 @@ namespace {
 constexpr float kFar = 1e9f;
 }  // namespace
 
-CollisionChecker::CollisionChecker(const RobotProfile& robot, double cell_m, double dynamic_clearance_m)
-    : footprint_(robot.footprint), cell_(cell_m) {
+CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConfig& local, double dynamic_clearance_m)
+    : footprint_(robot.footprint), cell_(local.cell_m) {
+  const double cell_m = local.cell_m;
+  // The distance field covers the local grid: sized here, once.
+  const auto w = static_cast<std::size_t>(std::lround((local.ahead_m + local.behind_m) / cell_m));
+  const auto h = static_cast<std::size_t>(std::lround(2.0 * local.side_m / cell_m));
+  distance_.assign(w * h, 0.0f);
   if (!isCounterClockwise(footprint_)) std::reverse(footprint_.begin(), footprint_.end());
   if (footprint_.size() > placed_.size()) {
     throw std::invalid_argument("robot footprint has " + std::to_string(footprint_.size()) + " vertices; at most " +
@@ -94,7 +99,10 @@ void CollisionChecker::prepare(const LocalMap& map) {
   grid_ = map.grid().data();
   grid_w_ = map.width();
   grid_h_ = map.height();
-  distance_.resize(static_cast<std::size_t>(map.width()) * static_cast<std::size_t>(map.height()));  // once
+  if (distance_.size() != static_cast<std::size_t>(map.width()) * static_cast<std::size_t>(map.height())) {
+    // A local map of another size than configured: resize (allocates; never in a set-up cycle).
+    distance_.resize(static_cast<std::size_t>(map.width()) * static_cast<std::size_t>(map.height()));
+  }
   conservativeDistanceField(map.grid(), map.width(), map.height(), cell_, distance_);
 }
 

@@ -30,7 +30,7 @@ class CollisionChecker {
 
   // `dynamic_clearance_m`: a gap kept to moving obstacles on top of what makes the sampled
   // motion check conservative (the footprint is grown by the sample step plus this).
-  CollisionChecker(const RobotProfile& robot, double cell_m, double dynamic_clearance_m = 0.02);
+  CollisionChecker(const RobotProfile& robot, const LocalMapConfig& local, double dynamic_clearance_m = 0.02);
 
   // Per cycle: the distance field of the local map's grid.
   void prepare(const LocalMap& map);

@@ -30,7 +30,7 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
     : config_(config),
       limits_(robot.limits),
       actions_(robot.limits, config.notches),
-      collision_(robot, local.cell_m),
+      collision_(robot, local),
       heuristic_(config.heuristic, robot.limits, inflated_static, local) {
   nodes_.reserve(config_.max_nodes);
   queue_.reserve(config_.max_nodes);

@@ -1,0 +1,102 @@
+#include "control/control_cycle.hpp"
+#include "map/generate.hpp"
+#include "sim/sim_runner.hpp"
+
+#include "scenarios.hpp"
+
+#include <gtest/gtest.h>
+
+namespace staa {
+namespace {
+
+TEST(ControlCycle, IdleWithoutAGoalAndBrakesTowardsStandstill) {
+  const Scenario s = test::openSpace();
+  ControlCycle cycle(s.map, s.robot, ControlConfig{});
+  CycleInputs in;
+  in.robot = UnicycleState{2, 2, 0, 1.0, 0.5};
+  const CycleOutput out = cycle.step(in, PlannerBudget::expansions(100));
+  EXPECT_EQ(out.state, CycleState::kIdle);
+  EXPECT_FALSE(out.planned);
+  // One control period (1/30 s) of braking at a_max = 2 and b_max = 6.
+  EXPECT_NEAR(out.v_cmd, 1.0 - 2.0 / 30.0, 1e-12);
+  EXPECT_NEAR(out.w_cmd, 0.5 - 6.0 / 30.0, 1e-12);
+}
+
+TEST(ControlCycle, GoalInsideAWallIsUnreachableAndTheRobotStops) {
+  Scenario s = test::doorTurn();
+  ControlCycle cycle(s.map, s.robot, ControlConfig{});
+  cycle.setGoal(Pose2{6.0, 6.0, 0.0});  // inside the wall x in [5.94, 6.06]
+  CycleInputs in;
+  in.robot = UnicycleState{2, 2.7, 0, 0.5, 0.0};
+  const CycleOutput out = cycle.step(in, PlannerBudget::expansions(100));
+  EXPECT_EQ(out.state, CycleState::kUnreachable);
+  EXPECT_EQ(out.path_status, PathStatus::kGoalInObstacle);
+  EXPECT_LT(out.v_cmd, 0.5);
+  EXPECT_FALSE(out.planned);
+}
+
+TEST(ControlCycle, GoalInAClosedRoomIsUnreachable) {
+  Scenario s = test::openSpace();
+  s.map.obstacles = {test::box(8, 8, 12, 8.2), test::box(8, 11.8, 12, 12), test::box(8, 8, 8.2, 12), test::box(11.8, 8, 12, 12)};
+  ControlCycle cycle(s.map, s.robot, ControlConfig{});
+  cycle.setGoal(Pose2{10, 10, 0});
+  CycleInputs in;
+  in.robot = UnicycleState{2, 2, 0, 0, 0};
+  const CycleOutput out = cycle.step(in, PlannerBudget::expansions(100));
+  EXPECT_EQ(out.state, CycleState::kUnreachable);
+  EXPECT_EQ(out.path_status, PathStatus::kNoPath);
+}
+
+TEST(ControlCycle, CommandIsTheFirstActionHeldForOnePeriodWithinTheLimits) {
+  const Scenario s = test::openSpace();
+  ControlCycle cycle(s.map, s.robot, ControlConfig{});
+  cycle.setGoal(s.goal);
+  CycleInputs in;
+  in.robot = UnicycleState{2, 2, 0, 1.98, 0.0};
+  const CycleOutput out = cycle.step(in, PlannerBudget::expansions(300));
+  ASSERT_TRUE(out.planned);
+  EXPECT_EQ(out.state, CycleState::kDriving);
+  const double period = 1.0 / 30.0;
+  EXPECT_NEAR(out.v_cmd, std::min(2.0, 1.98 + out.plan.first_action.a * period), 1e-12);
+  EXPECT_NEAR(out.w_cmd, out.plan.first_action.b * period, 1e-12);
+  EXPECT_LE(out.v_cmd, s.robot.limits.v_max);
+}
+
+// The expansion budget makes whole runs reproducible bit for bit: same scene, same budget,
+// same trace (moving obstacles included).
+TEST(ControlCycle, ExpansionBudgetRunsAreReproducibleBitForBit) {
+  const Scenario s = test::crossing();
+  SimOptions o;
+  o.duration_s = 6.0;
+  o.budget_expansions = 400;
+  const SimResult a = runSingleRobot(s, o);
+  const SimResult b = runSingleRobot(s, o);
+  ASSERT_EQ(a.trace.size(), b.trace.size());
+  ASSERT_GT(a.trace.size(), 100u);
+  for (std::size_t i = 0; i < a.trace.size(); ++i) {
+    ASSERT_EQ(a.trace[i].x, b.trace[i].x) << i;
+    ASSERT_EQ(a.trace[i].y, b.trace[i].y) << i;
+    ASSERT_EQ(a.trace[i].theta, b.trace[i].theta) << i;
+  }
+  EXPECT_EQ(a.expansions.mean, b.expansions.mean);
+  EXPECT_EQ(a.successors.mean, b.successors.mean);
+}
+
+TEST(ControlCycle, CrossesTheOfficeWithoutCollision) {
+  Scenario s;
+  s.name = "office";
+  s.map = generateOfficeMap();
+  s.robot = paperAgentProfile();
+  s.start = {1.5, 4.5, 0.0};
+  s.goal = {25.5, 22.5, 0.0};
+  SimOptions o;
+  o.duration_s = 40.0;
+  o.budget_expansions = 600;
+  const SimResult r = runSingleRobot(s, o);
+  EXPECT_TRUE(r.reached_goal) << r.final_state << " at " << r.final_pose.x << ", " << r.final_pose.y;
+  EXPECT_EQ(r.collisions, 0);
+  EXPECT_LT(r.time_to_goal_s, 30.0);  // a 36 m shortest path
+}
+
+}  // namespace
+}  // namespace staa

@@ -1,0 +1,154 @@
+#include "planner/staa_star.hpp"
+
+#include "geometry/clipper_ops.hpp"
+#include "geometry/convex.hpp"
+#include "geometry/polygon.hpp"
+#include "path/polygon_set.hpp"
+
+#include <gtest/gtest.h>
+
+namespace staa {
+namespace {
+
+Polygon box(double x0, double y0, double x1, double y1) { return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}; }
+
+// Everything a plan() needs around a fixed set of real obstacles.
+struct Bench {
+  RobotProfile robot;
+  std::vector<Polygon> real;
+  std::vector<Polygon> inflated;
+  PolygonSet real_set;
+  LocalMap local;
+  DynamicObstacleSet obstacles{8};
+  StaaConfig config;
+
+  Bench(RobotProfile r, std::vector<Polygon> obstacles_in, double inflation) : robot(std::move(r)), real(std::move(obstacles_in)) {
+    inflated = inflateEachToSimple(real, inflation + 0.03, 0.03);
+    real_set.assign(std::span<const Polygon>(real), PolygonSet::Options{0.5});
+    config.heuristic.static_inflation_m = inflation;
+    config.heuristic.dynamic_inflation_m = inflation;
+  }
+  StaaStar planner() const { return StaaStar(config, robot, inflated, local.config()); }
+  void update(const UnicycleState& s, const Vec2& goal) {
+    const Vec2 path[] = {s.position(), goal};
+    local.update(s.pose(), real_set, path, 0.0);
+  }
+};
+
+RobotProfile smallFastRobot() {
+  // A 20 cm square robot at the paper's limits: 0.6 m per 0.3 s step, three times its size.
+  RobotProfile r;
+  r.name = "small";
+  r.footprint = box(-0.1, -0.1, 0.1, 0.1);
+  r.limits = MotionLimits{2.0, -1.0, 3.0, 2.0, 6.0};
+  return r;
+}
+
+// The paper's weakness: collisions checked only at end poses 0.3 s apart let a fast robot jump
+// a thin wall. Ours checks the motion in between.
+TEST(StaaStar, NoTunnellingThroughAFiveCentimetreWall) {
+  Bench bench(smallFastRobot(), {box(1.0, -3.0, 1.05, 3.0)}, 0.15);
+  const UnicycleState start{0.0, 0.0, 0.0, 2.0, 0.0};
+  bench.update(start, Vec2(5.0, 0.0));
+  auto crosses = [](std::span<const UnicycleState> traj) {
+    for (std::size_t i = 1; i < traj.size(); ++i) {
+      const bool before = traj[i - 1].x < 1.0, after = traj[i].x > 1.05;
+      if (before && after && std::abs(traj[i].y) < 3.0 && std::abs(traj[i - 1].y) < 3.0) return true;
+    }
+    return false;
+  };
+  bench.config.check_swept = false;
+  StaaStar endpoints_only = bench.planner();
+  const PlanResult jumped = endpoints_only.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(400));
+  EXPECT_TRUE(crosses(jumped.trajectory)) << "the end-pose check should show the original's weakness";
+
+  bench.config.check_swept = true;
+  StaaStar swept = bench.planner();
+  const PlanResult safe = swept.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(400));
+  EXPECT_FALSE(crosses(safe.trajectory));
+  int edges_through = 0;
+  swept.forEachEdge([&](const UnicycleState& a, const UnicycleState& b) {
+    edges_through += a.x < 1.0 && b.x > 1.05 && std::abs(a.y) < 3.0 && std::abs(b.y) < 3.0;
+  });
+  EXPECT_EQ(edges_through, 0);
+}
+
+// Every successor collides (too fast, too close to a wall): the planner brakes at the limits.
+TEST(StaaStar, BrakesWhenEverySuccessorCollides) {
+  Bench bench(paperAgentProfile(), {box(0.9, -4.0, 1.2, 4.0)}, 0.5);
+  const UnicycleState start{0.0, 0.0, 0.0, 2.0, 1.0};
+  bench.update(start, Vec2(5.0, 0.0));
+  StaaStar planner = bench.planner();
+  const PlanResult r = planner.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(500));
+  EXPECT_EQ(r.outcome, PlanResult::Outcome::kBrake);
+  EXPECT_EQ(r.depth, 0);
+  // Deceleration at the limits, towards (0, 0).
+  EXPECT_DOUBLE_EQ(r.first_action.a, -2.0);
+  EXPECT_DOUBLE_EQ(r.first_action.b, -1.0 / 0.3);
+  const Action b = brakeAction(UnicycleState{0, 0, 0, 0.3, -0.5}, bench.robot.limits, 0.3);
+  EXPECT_DOUBLE_EQ(b.a, -1.0);  // not past zero within the step
+  EXPECT_NEAR(b.b, 0.5 / 0.3, 1e-12);
+}
+
+TEST(StaaStar, AbortsWithinBudgetAndReturnsTheLowestHeuristicState) {
+  Bench bench(paperAgentProfile(), {box(3.0, -0.5, 3.5, 0.5)}, 0.5);
+  const UnicycleState start{0.0, 0.0, 0.0, 0.0, 0.0};
+  bench.update(start, Vec2(5.5, 0.0));
+  StaaStar planner = bench.planner();
+  const PlanResult r = planner.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(60));
+  EXPECT_EQ(r.outcome, PlanResult::Outcome::kAborted);
+  EXPECT_EQ(r.stats.pops, 60u);
+  EXPECT_EQ(r.stats.successors, r.stats.expansions * 49u);
+  // The returned state is the one with the lowest h of all generated states.
+  double lowest = 1e18;
+  int nodes = 0;
+  planner.forEachEdge([&](const UnicycleState&, const UnicycleState& b) {
+    lowest = std::min(lowest, planner.heuristic().evaluate(b, 4));  // depth > 3: static h
+    ++nodes;
+  });
+  EXPECT_GT(nodes, 100);
+  EXPECT_NEAR(planner.heuristic().evaluate(r.best, 4), lowest, 1e-9);
+  ASSERT_GE(r.trajectory.size(), 2u);
+  EXPECT_EQ(r.trajectory.front().x, start.x);
+  // The first action leads from the start to the trajectory's second state.
+  const UnicycleState first = predictArc(start, r.first_action, 0.3, bench.robot.limits);
+  EXPECT_NEAR(first.x, r.trajectory[1].x, 1e-12);
+  EXPECT_NEAR(first.y, r.trajectory[1].y, 1e-12);
+}
+
+TEST(StaaStar, FinishesEarlyWhenTheGoalIsReachable) {
+  Bench bench(paperAgentProfile(), {}, 0.5);
+  const UnicycleState start{0.0, 0.0, 0.0, 0.0, 0.0};
+  bench.update(start, Vec2(1.5, 0.0));  // G~ = G, inside the box
+  StaaStar planner = bench.planner();
+  const PlanResult r = planner.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(5000));
+  EXPECT_EQ(r.outcome, PlanResult::Outcome::kFinished);
+  EXPECT_LT(r.best_h, 0.1);
+  EXPECT_LT(r.stats.pops, 5000u);
+  EXPECT_NEAR(r.best.x, 1.5, 0.25);
+  EXPECT_LT(std::abs(r.best.v), 0.3);  // it plans to stand at the final goal
+}
+
+TEST(StaaStar, AvoidsAPredictedMoverOnItsWay) {
+  Bench bench(paperAgentProfile(), {}, 0.5);
+  const UnicycleState start{0.0, 0.0, 0.0, 1.5, 0.0};
+  // A person crossing from the right, arriving on the robot's line in about 0.6 s.
+  const Polygon person = box(1.4, -1.05, 1.9, -0.55);
+  const PolygonView views[] = {person};
+  const Vec2 velocities[] = {{0.0, 1.3}};
+  bench.obstacles.set(views, velocities);
+  bench.update(start, Vec2(5.5, 0.0));
+  StaaStar planner = bench.planner();
+  const PlanResult r = planner.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(1000));
+  ASSERT_GE(r.trajectory.size(), 4u);
+  FixedPolygon at;
+  for (std::size_t d = 1; d <= 3; ++d) {
+    bench.obstacles.predict(0, 0.3 * static_cast<double>(d), at);
+    Polygon robot;
+    for (const Vec2& p : bench.robot.footprint) robot.push_back(r.trajectory[d].pose().transform(p));
+    EXPECT_FALSE(convexIntersect(robot, at.view())) << "depth " << d;
+  }
+}
+
+}  // namespace
+}  // namespace staa
