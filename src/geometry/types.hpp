@@ -27,8 +27,10 @@ inline double orient(const Vec2& a, const Vec2& b, const Vec2& c) { return cross
 
 // Wraps an angle to (-pi, pi].
 inline double wrapAngle(double a) {
-  a = std::remainder(a, 2.0 * kPi);
-  return a <= -kPi ? a + 2.0 * kPi : a;
+  // Angles in the planner stay within a few turns: subtract whole turns (no libm call).
+  if (a > -kPi && a <= kPi) return a;
+  a -= 2.0 * kPi * std::floor((a + kPi) / (2.0 * kPi));
+  return a <= -kPi ? a + 2.0 * kPi : (a > kPi ? a - 2.0 * kPi : a);
 }
 
 struct Pose2 {

@@ -150,22 +150,27 @@ int CollisionChecker::samplesFor(const ArcVelocities& vel, double dt) const {
 }
 
 bool CollisionChecker::motionFreeStatic(const UnicycleState& from, const ArcVelocities& vel, double dt) const {
-  const int n = samplesFor(vel, dt);
+  const double dth = vel.w_mid * dt;
+  return motionFreeStatic(makeArcMotion(from, std::cos(from.theta), std::sin(from.theta), vel.v_mid, vel.w_mid, dt,
+                                        std::cos(dth), std::sin(dth)));
+}
+
+bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const {
   // Check the end pose first: most collisions show there, and it is the one the paper checks.
-  const Pose2 end = poseAlongArc(from, vel.v_mid, vel.w_mid, dt);
-  if (!poseFreeStatic(end)) return false;
+  if (!fastPoseFreeStatic(FastPose{m.x1, m.y1, m.c1, m.s1})) return false;
+  const ArcVelocities vel{0.0, 0.0, m.v_mid, m.w_mid};
+  const int n = samplesFor(vel, m.dt);
   if (n <= 1) return true;
-  // The samples in between, stepping the heading by a fixed rotation (no sincos per sample).
-  // Positions follow Eq. (2) from the rotated heading, or the straight line when w ~ 0. A
-  // checked pose's clearance margin lets the following samples within that much travel go
-  // unchecked: no point of the robot moves farther than the travel bound per sample.
-  const double step = vel.w_mid * dt / n;
-  const double cs = std::cos(step), ss = std::sin(step);
-  const double c0 = std::cos(from.theta), s0 = std::sin(from.theta);
-  const bool straight = std::abs(vel.w_mid * dt) < 1e-6;
-  const double r = straight ? 0.0 : vel.v_mid / vel.w_mid;
-  const double per_sample = (std::abs(vel.v_mid) * dt + std::abs(vel.w_mid) * dt * circumradius_) / n;
-  double c = c0, sn = s0;
+  // The samples in between, stepping the heading by a fixed rotation. A checked pose's
+  // clearance margin lets the following samples within that much travel go unchecked: no
+  // point of the robot moves farther than the travel bound per sample.
+  const double step = m.w_mid * m.dt / n;
+  double cs, ss;
+  sinCos(step, cs, ss);
+  const bool straight = std::abs(m.w_mid * m.dt) < 1e-6;
+  const double r = straight ? 0.0 : m.v_mid / m.w_mid;
+  const double per_sample = (std::abs(m.v_mid) * m.dt + std::abs(m.w_mid) * m.dt * circumradius_) / n;
+  double c = m.c0, sn = m.s0;
   double covered = -1.0;  // travel still covered by the last checked pose's margin
   for (int k = 1; k < n; ++k) {
     const double nc = c * cs - sn * ss;
@@ -175,12 +180,12 @@ bool CollisionChecker::motionFreeStatic(const UnicycleState& from, const ArcVelo
     if (covered >= 0.0) continue;
     FastPose p{0.0, 0.0, c, sn};
     if (straight) {
-      const double d = vel.v_mid * dt * k / n;
-      p.x = from.x + d * c0;
-      p.y = from.y + d * s0;
+      const double d = m.v_mid * m.dt * k / n;
+      p.x = m.x0 + d * m.c0;
+      p.y = m.y0 + d * m.s0;
     } else {
-      p.x = from.x + r * (sn - s0);
-      p.y = from.y - r * (c - c0);
+      p.x = m.x0 + r * (sn - m.s0);
+      p.y = m.y0 - r * (c - m.c0);
     }
     double margin = 0.0;
     if (!fastPoseFreeStatic(p, &margin)) return false;

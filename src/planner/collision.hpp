@@ -40,6 +40,7 @@ class CollisionChecker {
   // Every pose along the motion from `from` over [0, dt] is free of the grid; samples are
   // close enough that no footprint point moves more than a sample step between them.
   bool motionFreeStatic(const UnicycleState& from, const ArcVelocities& vel, double dt) const;
+  bool motionFreeStatic(const ArcMotion& motion) const;
   // The footprint at `pose` overlaps none of the obstacles moved to time t.
   bool poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t) const;
   // The motion, sampled as above, against the obstacles moving over [t0, t0 + dt].

@@ -38,23 +38,24 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
   closed_w_ = static_cast<int>(std::ceil((local.ahead_m + local.behind_m) / config_.closed_xy_m));
   closed_h_ = static_cast<int>(std::ceil(2.0 * local.side_m / config_.closed_xy_m));
   closed_t_ = static_cast<int>(std::ceil(2.0 * kPi / config_.closed_theta_rad));
+  inv_closed_xy_ = 1.0 / config_.closed_xy_m;
+  inv_two_pi_ = 1.0 / (2.0 * kPi);
   closed_.assign(static_cast<std::size_t>(closed_w_) * static_cast<std::size_t>(closed_h_) * static_cast<std::size_t>(closed_t_), 0);
 }
 
 // The closed table coincides with the local grid (paper, Sec. III-E-2): x and y in the box's
 // frame, heading in 0.1 rad bins. False for states outside the box.
-bool StaaStar::closedIndex(const UnicycleState& s, std::size_t& index) const {
-  const Vec2 local = map_->origin().inverseTransform(s.position());
-  const LocalMapConfig& lc = map_->config();
-  const int i = static_cast<int>(std::floor((local.x() + lc.behind_m) / config_.closed_xy_m));
-  const int j = static_cast<int>(std::floor((local.y() + lc.side_m) / config_.closed_xy_m));
-  if (i < 0 || j < 0 || i >= closed_w_ || j >= closed_h_) return false;
-  double th = std::fmod(s.theta, 2.0 * kPi);
-  if (th < 0.0) th += 2.0 * kPi;
-  const int t = std::min(static_cast<int>(th / config_.closed_theta_rad), closed_t_ - 1);
-  index = (static_cast<std::size_t>(t) * static_cast<std::size_t>(closed_h_) + static_cast<std::size_t>(j)) *
+bool StaaStar::closedIndex(double x, double y, double theta, std::size_t& index) const {
+  const double lx = box_c_ * (x - box_x_) + box_s_ * (y - box_y_);
+  const double ly = -box_s_ * (x - box_x_) + box_c_ * (y - box_y_);
+  const double fi = (lx + box_behind_) * inv_closed_xy_, fj = (ly + box_side_) * inv_closed_xy_;
+  if (!(fi >= 0.0 && fj >= 0.0 && fi < closed_w_ && fj < closed_h_)) return false;
+  double th = theta * inv_two_pi_;
+  th = (th - std::floor(th)) * closed_t_;  // [0, closed_t_)
+  const int t = std::min(static_cast<int>(th), closed_t_ - 1);
+  index = (static_cast<std::size_t>(t) * static_cast<std::size_t>(closed_h_) + static_cast<std::size_t>(fj)) *
               static_cast<std::size_t>(closed_w_) +
-          static_cast<std::size_t>(i);
+          static_cast<std::size_t>(fi);
   return true;
 }
 
@@ -87,6 +88,12 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   const std::int64_t t_begin = timing_ ? steadyClockNs() : 0;
   budget.start();
   map_ = &map;
+  box_x_ = map.origin().x;
+  box_y_ = map.origin().y;
+  box_c_ = std::cos(map.origin().theta);
+  box_s_ = std::sin(map.origin().theta);
+  box_behind_ = map.config().behind_m;
+  box_side_ = map.config().side_m;
   collision_.prepare(map);
   heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map);
   nodes_.clear();
@@ -116,7 +123,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     ++st.pops;
     const Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool may be appended below
     std::size_t cell = 0;
-    if (closedIndex(node.s, cell)) {
+    if (closedIndex(node.s.x, node.s.y, node.s.theta, cell)) {
       if (closed_[cell] == generation_) continue;  // its cell was closed by an earlier pop
       closed_[cell] = generation_;
     }
@@ -129,17 +136,30 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     const int depth = node.depth + 1;
     const double t0 = node.depth * config_.dt;
     const bool predict = depth <= config_.prediction_depth;
+    // Per expansion, the trigonometry of the 7 x 7 actions: the heading's cosine and sine once,
+    // and one rotation per angular acceleration (the linear ones do not rotate).
+    const std::size_t notches = actions_.notches();
+    const double c0 = std::cos(node.s.theta), s0 = std::sin(node.s.theta);
+    for (std::size_t j = 0; j < notches; ++j) {
+      const ArcVelocities av = arcVelocities(node.s, actions_[j], config_.dt, limits_);
+      rot_w_end_[j] = av.w_end;
+      rot_w_mid_[j] = av.w_mid;
+      sinCos(av.w_mid * config_.dt, rot_c_[j], rot_s_[j]);
+    }
     for (std::size_t a = 0; a < actions_.size(); ++a) {
       ++st.successors;
+      const std::size_t j = a % notches;  // actions are ordered (a index) * notches + (b index)
       const ArcVelocities vel = arcVelocities(node.s, actions_[a], config_.dt, limits_);
-      const Pose2 end = poseAlongArc(node.s, vel.v_mid, vel.w_mid, config_.dt);
-      const UnicycleState child{end.x, end.y, end.theta, vel.v_end, vel.w_end};
+      const ArcMotion motion =
+          makeArcMotion(node.s, c0, s0, vel.v_mid, rot_w_mid_[j], config_.dt, rot_c_[j], rot_s_[j]);
+      const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, rot_w_end_[j]};
+      const Pose2 end{motion.x1, motion.y1, motion.theta1};
       std::size_t child_cell = 0;
-      if (!closedIndex(child, child_cell)) continue;   // outside the local map
-      if (closed_[child_cell] == generation_) continue;  // checked on push too
+      if (!closedIndex(child.x, child.y, child.theta, child_cell)) continue;  // outside the local map
+      if (closed_[child_cell] == generation_) continue;                        // checked on push too
       const std::int64_t tc = timing_ ? steadyClockNs() : 0;
-      bool free = config_.check_swept ? collision_.motionFreeStatic(node.s, vel, config_.dt)
-                                      : collision_.poseFreeStatic(end);
+      bool free = config_.check_swept ? collision_.motionFreeStatic(motion)
+                                      : collision_.fastPoseFreeStatic({motion.x1, motion.y1, motion.c1, motion.s1});
       if (free && predict) {
         free = config_.check_swept ? collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0)
                                    : collision_.poseFreeDynamic(end, obstacles, t0 + config_.dt);

@@ -16,6 +16,7 @@
 #include "planner/heuristic.hpp"
 #include "planner/unicycle.hpp"
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -106,7 +107,7 @@ class StaaStar {
     std::int32_t node;
   };
 
-  bool closedIndex(const UnicycleState& s, std::size_t& index) const;
+  bool closedIndex(double x, double y, double theta, std::size_t& index) const;
   void push(std::int32_t node);
   std::int32_t pop();
 
@@ -121,6 +122,12 @@ class StaaStar {
   std::vector<std::uint32_t> closed_;  // generation stamps over (x, y, theta) cells
   std::uint32_t generation_ = 0;
   int closed_w_ = 0, closed_h_ = 0, closed_t_ = 0;
+  double inv_closed_xy_ = 20.0, inv_two_pi_ = 0.0;
+  // This cycle's box (the closed table's frame).
+  double box_x_ = 0.0, box_y_ = 0.0, box_c_ = 1.0, box_s_ = 0.0, box_behind_ = 0.0, box_side_ = 0.0;
+  // Per expansion: for each angular acceleration, the end and mid angular velocities and the
+  // cosine and sine of the rotation over dt.
+  std::array<double, ActionSet::kMaxNotches> rot_w_end_{}, rot_w_mid_{}, rot_c_{}, rot_s_{};
   std::vector<UnicycleState> trajectory_;
   bool timing_ = false;
 };

@@ -45,6 +45,34 @@ Pose2 poseAlongArc(const UnicycleState& s, double v_mid, double w_mid, double t)
   return Pose2{s.x + d * (c * fx - sn * fy), s.y + d * (sn * fx + c * fy), s.theta + dth};
 }
 
+ArcMotion makeArcMotion(const UnicycleState& s, double c0, double s0, double v_mid, double w_mid, double dt, double cd,
+                        double sd) {
+  ArcMotion m{};
+  m.x0 = s.x;
+  m.y0 = s.y;
+  m.c0 = c0;
+  m.s0 = s0;
+  m.v_mid = v_mid;
+  m.w_mid = w_mid;
+  m.dt = dt;
+  const double dth = w_mid * dt;
+  m.c1 = c0 * cd - s0 * sd;
+  m.s1 = s0 * cd + c0 * sd;
+  m.theta1 = s.theta + dth;
+  const double d = v_mid * dt;
+  if (std::abs(dth) < 1e-6) {
+    const double fx = 1.0 - dth * dth / 6.0, fy = 0.5 * dth;
+    m.x1 = s.x + d * (c0 * fx - s0 * fy);
+    m.y1 = s.y + d * (s0 * fx + c0 * fy);
+  } else {
+    // r (sin(theta + dth) - sin theta), -r (cos(theta + dth) - cos theta), r = v / w.
+    const double r = v_mid / w_mid;
+    m.x1 = s.x + r * (m.s1 - s0);
+    m.y1 = s.y - r * (m.c1 - c0);
+  }
+  return m;
+}
+
 UnicycleState predictArc(const UnicycleState& s, const Action& action, double dt, const MotionLimits& limits) {
   const ArcVelocities av = arcVelocities(s, action, dt, limits);
   const Pose2 p = poseAlongArc(s, av.v_mid, av.w_mid, dt);

@@ -6,6 +6,7 @@
 #include "geometry/types.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 
 namespace staa {
@@ -62,5 +63,33 @@ struct ArcVelocities {
   double v_end, w_end, v_mid, w_mid;
 };
 ArcVelocities arcVelocities(const UnicycleState& s, const Action& action, double dt, const MotionLimits& limits);
+
+// One predicted motion with the trigonometry already done: the start (with its heading's
+// cosine and sine), the mid-interval velocities, and the end pose (likewise). The planner
+// builds these from per-expansion tables (7 rotations per node, not 49), and the collision
+// checker samples along them without calling sin or cos again.
+struct ArcMotion {
+  double x0, y0, c0, s0;  // start position and heading
+  double v_mid, w_mid, dt;
+  double x1, y1, c1, s1;  // end position and heading
+  double theta1;          // end heading, unwrapped
+};
+
+// cos and sin of a small angle by their series (exact to ~1e-10 below 0.3 rad), else libm.
+inline void sinCos(double a, double& c, double& s) {
+  if (a > -0.3 && a < 0.3) {
+    const double a2 = a * a;
+    c = 1.0 - a2 / 2.0 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0)));
+    s = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0 * (1.0 - a2 / 72.0))));
+    return;
+  }
+  c = std::cos(a);
+  s = std::sin(a);
+}
+
+// The motion from `s` with the given mid-interval velocities, whose total rotation
+// w_mid * dt has cosine cd and sine sd: Eq. (2) written with the rotated heading.
+ArcMotion makeArcMotion(const UnicycleState& s, double c0, double s0, double v_mid, double w_mid, double dt, double cd,
+                        double sd);
 
 }  // namespace staa
