@@ -43,9 +43,9 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   static_discovered_.assign(static_.polygonCount(), 0);
   dynamic_discovered_.assign(options_.max_dynamic_polygons, 0);
   const std::size_t max_nodes = static_.vertexCount() + options_.max_dynamic_vertices + 2;
-  // Each query to a kept search tree adds one start node; the slack lets a tree live for
-  // kTreeSlack queries before it is rebuilt (which a query does when the slack runs out).
-  nodes_.reserve(max_nodes + kTreeSlack);
+  nodes_.reserve(max_nodes);
+  target_blocked_.clear();
+  target_blocked_.reserve(max_nodes);
   heap_.reserve(max_nodes);
   closed_.reserve(max_nodes);
   path_.reserve(max_nodes + 2);
@@ -179,6 +179,9 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   blocked_count_ = 0;
   total_discovered_ = 0;
   nodes_.push_back(Node{});  // 0: the goal, root of the backward search
+  Node target;               // 1: the start, the search's target, replaced by every query
+  target.state = kClosed;    // (not a node of the graph until a query places it)
+  nodes_.push_back(target);
   // The kept polygons join the new graph: list them, clear the marks, discover them again
   // (discovering one may bring in others, which are then not added twice).
   rediscover_.clear();
@@ -339,6 +342,10 @@ void MinimalConstruct::repairParent(std::int32_t node) {
 }
 
 bool MinimalConstruct::edgeKnownBlocked(std::int32_t a, std::int32_t b) const {
+  if (a == kTarget || b == kTarget) {
+    const std::int32_t other = a == kTarget ? b : a;
+    return std::find(target_blocked_.begin(), target_blocked_.end(), other) != target_blocked_.end();
+  }
   if (blocked_count_ == 0) return false;
   const std::uint64_t key = edgeKey(a, b);
   const std::size_t mask = blocked_keys_.size() - 1;
@@ -349,6 +356,11 @@ bool MinimalConstruct::edgeKnownBlocked(std::int32_t a, std::int32_t b) const {
 }
 
 void MinimalConstruct::markEdgeBlocked(std::int32_t a, std::int32_t b) {
+  if (a == kTarget || b == kTarget) {
+    // Edges into the start change meaning with every query: kept apart, cleared per query.
+    if (target_blocked_.size() < target_blocked_.capacity()) target_blocked_.push_back(a == kTarget ? b : a);
+    return;
+  }
   if (2 * (blocked_count_ + 1) > blocked_keys_.size()) {
     // Pathological: more failed edges than four per node. Grow (allocates) rather than loop.
     std::vector<std::uint64_t> keys;
@@ -379,9 +391,10 @@ std::int32_t MinimalConstruct::addTargetNode(const Vec2& start) {
   Node node;
   node.pos = start;
   node.g = kInf;
-  nodes_.push_back(node);
+  nodes_[kTarget] = node;
+  target_blocked_.clear();  // blocked edges into the previous start are about another point
   target_pos_ = start;
-  return static_cast<std::int32_t>(nodes_.size() - 1);
+  return kTarget;
 }
 
 MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec2& goal_in, bool with_dynamic) {
@@ -407,15 +420,13 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
   // stay: the next query to the same goal only swaps the start and resumes the search.
   // A kept tree is valid for the same goal and the same obstacles (static, or static plus
   // the dynamic set it was grown with: setDynamicObstacles invalidates it).
-  const bool reuse = tree_valid_ && goal == tree_goal_ && use_dynamic == tree_with_dynamic_ &&
-                     nodes_.size() < nodes_.capacity();
+  const bool reuse = tree_valid_ && goal == tree_goal_ && use_dynamic == tree_with_dynamic_;
   bool found_fast = false;
   if (reuse) {
-    // Retire the previous start: it was never expanded, so nothing hangs below it.
-    Node& old = nodes_[static_cast<std::size_t>(target_)];
-    if (old.state == kOpen) heapRemove(target_);
-    if (!closed_.empty() && closed_.back() == target_) closed_.pop_back();
-    old.state = kClosed;  // never relaxed again
+    // Retire the previous start: it was never expanded, so nothing hangs below it, and its
+    // node takes the new start.
+    if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
+    if (!closed_.empty() && closed_.back() == kTarget) closed_.pop_back();
     target_ = addTargetNode(start);
     for (const std::int32_t c : closed_) relax(c, target_);
     // The common case, without touching the heap: the new start's best connection to the
@@ -424,13 +435,19 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     Node& t = nodes_[static_cast<std::size_t>(target_)];
     bool done = false;
     if (t.state == kOpen) {
-      double lower = kInf;
+      // Is some open node's true key g + |node - start| below the start's g? Only nodes with
+      // g below it can be, and the comparison needs no square root.
+      bool lower = false;
       for (const std::int32_t n : heap_) {
-        if (n == target_) continue;
         const Node& o = nodes_[static_cast<std::size_t>(n)];
-        lower = std::min(lower, o.g + (target_pos_ - o.pos).norm());
+        const double slack = t.g - o.g;
+        if (n == target_ || slack <= 0.0) continue;
+        if ((target_pos_ - o.pos).squaredNorm() < slack * slack) {
+          lower = true;
+          break;
+        }
       }
-      if (t.g <= lower) {
+      if (!lower) {
         ++edge_checks_;
         const Vec2& u = nodes_[static_cast<std::size_t>(t.parent)].pos;
         if (!static_.segmentBlocked(u, t.pos) && !(use_dynamic && dynamic_.segmentBlocked(u, t.pos))) {

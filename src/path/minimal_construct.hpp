@@ -86,7 +86,7 @@ class MinimalConstruct {
 
  private:
   static constexpr std::int32_t kNone = -1;
-  static constexpr std::size_t kTreeSlack = 4096;
+  static constexpr std::int32_t kTarget = 1;  // node id of the start (the backward search's target)
   static constexpr std::size_t kCandidates = 256;
   enum : std::uint8_t { kUnseen = 0, kOpen = 1, kClosed = 2 };
 
@@ -160,6 +160,7 @@ class MinimalConstruct {
   std::vector<std::uint32_t> static_cover_;
   std::vector<Vec2> path_;
   // Open-addressing set of blocked (node, node) edges, cleared in O(1) by a generation stamp.
+  std::vector<std::int32_t> target_blocked_;  // nodes whose edge to the current start is blocked
   std::vector<std::uint64_t> blocked_keys_;
   std::vector<std::uint32_t> blocked_gen_;
   std::uint32_t blocked_generation_ = 1;
