@@ -121,11 +121,23 @@ double Heuristic::evaluate(const UnicycleState& s, int depth) {
 double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
   const Vec2 p = s.position();
   const Vec2 g = goal_.position();
-  MinimalConstruct::Result r;
+  // The static path first (its tree is shared by all depths). Where the predicted obstacles
+  // D'(t) leave it untouched it is also the shortest path among them (obstacles only make
+  // paths longer), so the depth's dynamic search runs only for paths that D'(t) cuts.
+  MinimalConstruct::Result r = static_search_.query(p, g, false);
   const bool dynamic = depth >= 1 && depth <= config_.dynamic_depth && has_dynamic_[static_cast<std::size_t>(depth - 1)];
-  if (dynamic) r = dynamic_search_[static_cast<std::size_t>(depth - 1)].query(p, g, true);
-  // No way around the predicted obstacles (a person in the door): the static path.
-  if (!dynamic || r.status != MinimalConstruct::Status::kFound) r = static_search_.query(p, g, false);
+  if (dynamic && r.status == MinimalConstruct::Status::kFound) {
+    MinimalConstruct& search = dynamic_search_[static_cast<std::size_t>(depth - 1)];
+    const PolygonSet& d = search.dynamicObstacles();
+    bool clear = true;
+    for (std::size_t i = 0; i < r.path.size() && clear; ++i) clear = !d.pointBlocked(r.path[i]);
+    for (std::size_t i = 1; i < r.path.size() && clear; ++i) clear = !d.segmentBlocked(r.path[i - 1], r.path[i]);
+    if (!clear) {
+      const MinimalConstruct::Result around = search.query(p, g, true);
+      // No way around the predicted obstacles (a person in the door): keep the static path.
+      if (around.status == MinimalConstruct::Status::kFound) r = around;
+    }
+  }
   if (r.status != MinimalConstruct::Status::kFound) {
     last_path_ = {};
     // Unreachable G~: rank states by straight-line RTR, far behind any reachable state.
