@@ -251,6 +251,10 @@ int simulate(Request& rq) {
   // Open the output first: a bad --json path fails before a long run, not after it.
   std::ofstream json_out;
   if (!rq.json_file.empty()) {
+    // Create the folder it goes into, as --svg does for its own.
+    const std::filesystem::path parent = std::filesystem::path(rq.json_file).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
     json_out.open(rq.json_file, std::ios::binary | std::ios::trunc);
     if (!json_out) throw InputError("--json: cannot write '" + rq.json_file + "'");
   }
