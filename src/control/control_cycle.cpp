@@ -33,9 +33,10 @@ double dynamicInflationFor(const ControlConfig& config, const RobotProfile& robo
   for (const Vec2& p : robot.footprint) half_width = std::max(half_width, std::abs(p.y()));
   return half_width + 0.05;
 }
-StaaConfig staaFor(StaaConfig c, double inflation, double dynamic_inflation) {
+StaaConfig staaFor(StaaConfig c, double inflation, double dynamic_inflation, double local_reach) {
   c.heuristic.static_inflation_m = inflation;
   c.heuristic.dynamic_inflation_m = dynamic_inflation;
+  c.heuristic.local_reach_m = local_reach;
   return c;
 }
 }  // namespace
@@ -50,7 +51,8 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
       local_obstacles_(inflateEachToSimple(path_.realObstacles(), local_inflation_ + config.path.arc_tolerance_m,
                                            config.path.arc_tolerance_m)),
       local_(config.local),
-      staa_(staaFor(config.staa, inflation_, dynamic_inflation_), robot, local_obstacles_, config.local),
+      staa_(staaFor(config.staa, inflation_, dynamic_inflation_, local_inflation_ + config.path.arc_tolerance_m), robot,
+            local_obstacles_, config.local),
       empty_obstacles_(1) {}
 
 void ControlCycle::setGoal(const Pose2& goal) {

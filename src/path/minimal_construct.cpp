@@ -450,7 +450,7 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
       if (!lower) {
         ++edge_checks_;
         const Vec2& u = nodes_[static_cast<std::size_t>(t.parent)].pos;
-        if (!static_.segmentBlocked(u, t.pos) && !(use_dynamic && dynamic_.segmentBlocked(u, t.pos))) {
+        if (staticFree(u, t.pos) && !(use_dynamic && dynamic_.segmentBlocked(u, t.pos))) {
           heapRemove(target_);
           t.state = kClosed;
           closed_.push_back(target_);
@@ -492,7 +492,7 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
       // The lazy step: only now is the edge into v checked against the obstacles.
       const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
       ++edge_checks_;
-      std::size_t nb = static_.segmentBlockers(u, node.pos, blockers_);
+      std::size_t nb = oracle_ != nullptr && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
       if (use_dynamic) {
         const std::size_t nd =
             dynamic_.segmentBlockers(u, node.pos, std::span<std::uint32_t>(blockers_).subspan(nb));

@@ -74,6 +74,15 @@ class MinimalConstruct {
   const PolygonSet& dynamicObstacles() const { return dynamic_; }
   std::size_t droppedDynamicPolygons() const { return dropped_dynamic_; }
 
+  // An optional quick test that may declare a segment free of the static obstacles (true
+  // only when it certainly is, e.g. from a clearance map); anything else falls back to the
+  // exact test. Plain function pointer and context: no allocation, no virtual call.
+  using FreeSegmentOracle = bool (*)(const void* context, const Vec2& a, const Vec2& b);
+  void setFreeSegmentOracle(FreeSegmentOracle oracle, const void* context) {
+    oracle_ = oracle;
+    oracle_context_ = context;
+  }
+
   // Shortest path from start to goal among the static obstacles, plus the dynamic ones when
   // `with_dynamic`. The returned span stays valid until the next query.
   Result query(const Vec2& start, const Vec2& goal, bool with_dynamic);
@@ -133,6 +142,11 @@ class MinimalConstruct {
   bool heapLess(std::int32_t a, std::int32_t b) const;
 
   Options options_;
+  FreeSegmentOracle oracle_ = nullptr;
+  const void* oracle_context_ = nullptr;
+  bool staticFree(const Vec2& a, const Vec2& b) const {
+    return (oracle_ != nullptr && oracle_(oracle_context_, a, b)) || !static_.segmentBlocked(a, b);
+  }
   struct Candidate {
     Vec2 point{0.0, 0.0};
     Vec2 edge{1.0, 0.0};

@@ -142,6 +142,26 @@ bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) cons
   return true;
 }
 
+bool CollisionChecker::segmentClear(const Vec2& a, const Vec2& b, double radius) const {
+  const Vec2 d = b - a;
+  const double len = d.norm();
+  double t = 0.0;
+  for (int step = 0; step < 48; ++step) {
+    const Vec2 p = len > 0.0 ? Vec2(a + d * (t / len)) : a;
+    const double gx = gridX(p.x(), p.y()), gy = gridY(p.x(), p.y());
+    const std::ptrdiff_t cell = cellIndex(gx, gy);
+    if (cell < 0) return false;
+    // The grid knows nothing of obstacles beyond the box: its edges count as obstacles.
+    const double to_edge = std::min(std::min(gx, grid_w_ - gx), std::min(gy, grid_h_ - gy)) * cell_;
+    const double slack = std::min<double>(distance_[static_cast<std::size_t>(cell)], to_edge) - radius;
+    if (slack <= 0.0) return false;
+    if (t >= len) return true;
+    // Every point within `slack` of p is still clear (the field is 1-Lipschitz and conservative).
+    t = std::min(len, t + slack);
+  }
+  return false;
+}
+
 int CollisionChecker::samplesFor(const ArcVelocities& vel, double dt) const {
   // No outline point may move more than a sample step between two samples: translation plus
   // rotation times the farthest point's radius bounds that motion.

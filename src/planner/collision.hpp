@@ -59,6 +59,11 @@ class CollisionChecker {
   // possibly touching the grid (0 when only the exact outline test cleared the pose).
   bool fastPoseFreeStatic(const FastPose& pose, double* slack = nullptr) const;
 
+  // True when every point of the segment is certainly farther than `radius` from the
+  // obstacles of the collision grid (sphere tracing over the distance field). False means
+  // "don't know": near an obstacle, outside the local box, or after too many steps.
+  bool segmentClear(const Vec2& a, const Vec2& b, double radius) const;
+
   double circumradius() const { return circumradius_; }
   std::span<const Vec2> outline() const { return {outline_.data(), outline_count_}; }
   const Polygon& footprint() const { return footprint_; }

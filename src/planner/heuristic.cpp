@@ -89,9 +89,21 @@ Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, 
   }
 }
 
-void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map) {
+bool Heuristic::clearSegment(const void* self, const Vec2& a, const Vec2& b) {
+  const auto* h = static_cast<const Heuristic*>(self);
+  return h->clearance_->segmentClear(a, b, h->config_.local_reach_m);
+}
+
+void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map,
+                        const CollisionChecker* clearance) {
   goal_ = goal;
   map_ = &map;
+  // The collision grid's clearance (this cycle's) may vouch for free segments of the local
+  // paths: their obstacles reach at most local_reach_m beyond the real ones.
+  clearance_ = config_.local_reach_m > 0.0 ? clearance : nullptr;
+  const MinimalConstruct::FreeSegmentOracle oracle = clearance_ != nullptr ? &Heuristic::clearSegment : nullptr;
+  static_search_.setFreeSegmentOracle(oracle, this);
+  for (MinimalConstruct& mc : dynamic_search_) mc.setFreeSegmentOracle(oracle, this);
   final_goal_ = map.intermediateGoal().is_final;
   const std::size_t n = std::min(obstacles.size(), views_.size());
   for (int k = 0; k < 3; ++k) {

@@ -16,6 +16,7 @@
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
 #include "path/minimal_construct.hpp"
+#include "planner/collision.hpp"
 #include "planner/unicycle.hpp"
 
 #include <array>
@@ -34,6 +35,10 @@ struct HeuristicConfig {
   int dynamic_depth = 3;           // D'(t) is used up to this depth (the paper: 3)
   double dynamic_inflation_m = 0.3;  // radius that grows D(t) into D'(t)
   double static_inflation_m = 0.5;   // the robot's radius (Dijkstra RTR: cells this close to C are blocked)
+  // How far the local paths' obstacles (the polygons handed to the constructor) reach beyond
+  // the real ones, at most; lets the collision grid's clearance vouch for free segments.
+  // 0: no such shortcut.
+  double local_reach_m = 0.0;
   int arc_steps = 4;               // chords per corner of an inflated moving obstacle
   double unreachable_penalty_s = 100.0;  // h when no path exists at all
   // At the final goal (G~ = G) the robot should stand, not drive through: add the extra time
@@ -55,7 +60,8 @@ class Heuristic {
 
   // Per cycle: the intermediate goal, the moving obstacles at the cycle's start, the step dt,
   // and (for Dijkstra RTR) the local map. No allocation.
-  void prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map);
+  void prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map,
+               const CollisionChecker* clearance = nullptr);
 
   // h for a state at search depth `depth` (time depth * dt).
   double evaluate(const UnicycleState& s, int depth);
@@ -83,6 +89,9 @@ class Heuristic {
   std::array<PolygonView, 32> views_{};
   std::span<const Vec2> last_path_;
   std::uint64_t queries_ = 0;
+
+  const CollisionChecker* clearance_ = nullptr;
+  static bool clearSegment(const void* self, const Vec2& a, const Vec2& b);
 
   // Dijkstra RTR: distance (m) to G~ per local cell, and the descent direction per cell.
   const LocalMap* map_ = nullptr;

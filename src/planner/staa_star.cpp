@@ -95,7 +95,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   box_behind_ = map.config().behind_m;
   box_side_ = map.config().side_m;
   collision_.prepare(map);
-  heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map);
+  heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map, &collision_);
   nodes_.clear();
   queue_.clear();
   trajectory_.clear();

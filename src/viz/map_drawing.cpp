@@ -69,6 +69,7 @@ SvgCanvas makeMapCanvas(const PolygonMap& map, double px_per_m) {
   SvgCanvasOptions options;
   options.px_per_m = px_per_m;
   options.margin_px = 16.0;
+  options.header_px = 22.0;
   options.footer_px = 30.0;
   return SvgCanvas(mapDrawingBox(map), options);
 }
@@ -100,7 +101,7 @@ void drawMap(SvgCanvas& canvas, const PolygonMap& map, const std::vector<Polygon
   if (map.bounds) canvas.rect(*map.bounds, svgStroke(kBounds, 1.5));
 
   // Goals: numbered rings, sized to the scale but readable at any zoom.
-  const double r = std::clamp(canvas.toPixels(0.22), 5.0, 9.0);
+  const double r = std::clamp(canvas.toPixels(0.26), 5.0, 9.0);
   SvgStyle label;
   label.fill = kGoal;
   label.extra = "font-weight=\"bold\"";

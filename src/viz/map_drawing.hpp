@@ -20,7 +20,8 @@ Box mapDrawingBox(const PolygonMap& map);
 // clamped to [1, 100] px per metre.
 double autoScale(const Box& world, double target_px = 900.0);
 
-// A canvas over mapDrawingBox(map) with room in the footer for the scale bar and legend.
+// A canvas over mapDrawingBox(map) with room for a title above and the scale bar and legend
+// below.
 SvgCanvas makeMapCanvas(const PolygonMap& map, double px_per_m);
 
 // Grid lines every metre (only when they are at least 8 px apart), the inflated obstacles

@@ -70,12 +70,12 @@ SvgCanvas::SvgCanvas(const Box& world, const SvgCanvasOptions& options) : world_
     throw std::invalid_argument("SvgCanvas: px_per_m must be positive, got " + svgNumber(options.px_per_m));
   }
   width_px_ = 2.0 * options_.margin_px + toPixels(world.width()) + options_.side_panel_px;
-  height_px_ = 2.0 * options_.margin_px + toPixels(world.height()) + options_.footer_px;
+  height_px_ = 2.0 * options_.margin_px + options_.header_px + toPixels(world.height()) + options_.footer_px;
 }
 
 Vec2 SvgCanvas::toPixel(const Vec2& w) const {
   return {options_.margin_px + (w.x() - world_.min.x()) * options_.px_per_m,
-          options_.margin_px + (world_.max.y() - w.y()) * options_.px_per_m};
+          options_.margin_px + options_.header_px + (world_.max.y() - w.y()) * options_.px_per_m};
 }
 
 void SvgCanvas::addCss(std::string_view css) {
@@ -268,6 +268,15 @@ void SvgCanvas::textPx(const Vec2& at_px, std::string_view label, double font_px
   body_ += "</text>\n";
 }
 
+void SvgCanvas::title(std::string_view text, double font_px) {
+  const double baseline = options_.header_px > 0.0 ? options_.margin_px + 0.5 * options_.header_px + 0.35 * font_px
+                                                   : 0.5 * options_.margin_px + 0.35 * font_px;
+  SvgStyle style;
+  style.fill = "#222";
+  style.extra = "font-weight=\"bold\"";
+  textPx({options_.margin_px, baseline}, text, font_px, TextAnchor::kStart, style);
+}
+
 void SvgCanvas::scaleBar(double length_m) {
   if (!(length_m > 0.0)) {
     length_m = 1.0;
@@ -278,7 +287,7 @@ void SvgCanvas::scaleBar(double length_m) {
   }
   const double len = toPixels(length_m);
   const double x0 = options_.margin_px;
-  const double y = options_.margin_px + toPixels(world_.height()) + 0.5 * options_.margin_px + 8.0;
+  const double y = options_.margin_px + options_.header_px + toPixels(world_.height()) + 0.5 * options_.margin_px + 8.0;
   auto n = [](double v) { return svgNumber(v); };
   // A bar with end ticks, half black and half white like a surveyor's bar.
   body_ += "<g class=\"scale-bar\"><rect x=\"" + n(x0) + "\" y=\"" + n(y - 3) + "\" width=\"" + n(len) +
@@ -293,9 +302,11 @@ void SvgCanvas::scaleBar(double length_m) {
 void SvgCanvas::legend(std::span<const LegendEntry> entries) {
   const double font = 12.0;
   const bool panel = options_.side_panel_px > 0.0;
-  Vec2 at = panel ? Vec2{2.0 * options_.margin_px + toPixels(world_.width()), options_.margin_px + 10.0}
+  Vec2 at = panel ? Vec2{2.0 * options_.margin_px + toPixels(world_.width()),
+                         options_.margin_px + options_.header_px + 10.0}
                   : Vec2{std::max(options_.margin_px, footer_cursor_px_),
-                         options_.margin_px + toPixels(world_.height()) + 0.5 * options_.margin_px + 8.0};
+                         options_.margin_px + options_.header_px + toPixels(world_.height()) +
+                             0.5 * options_.margin_px + 8.0};
   for (const LegendEntry& e : entries) {
     const double sx = at.x(), sy = at.y();
     switch (e.symbol) {

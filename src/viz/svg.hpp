@@ -36,6 +36,7 @@ SvgStyle svgStroke(std::string stroke, double width_px, std::string dash = {});
 struct SvgCanvasOptions {
   double px_per_m = 30.0;
   double margin_px = 20.0;      // on every side of the world box
+  double header_px = 0.0;       // above the world box: room for a title
   double footer_px = 34.0;      // below the world box: room for the scale bar
   double side_panel_px = 0.0;   // right of the world box: room for a legend
   std::string background = "#ffffff";  // empty: transparent
@@ -62,7 +63,7 @@ class SvgCanvas {
   const SvgCanvasOptions& options() const { return options_; }
 
   // World (metres, y up) to pixels (y down): the world's min corner lands at the drawing
-  // area's bottom-left, (margin, margin + height * scale).
+  // area's bottom-left, (margin, header + margin + height * scale).
   Vec2 toPixel(const Vec2& world) const;
   double toPixels(double metres) const { return metres * options_.px_per_m; }
 
@@ -96,6 +97,8 @@ class SvgCanvas {
   // Text at a pixel position (titles, captions in the margins).
   void textPx(const Vec2& at_px, std::string_view label, double font_px = 11.0,
               TextAnchor anchor = TextAnchor::kStart, const SvgStyle& style = {});
+  // A title in the header (or, without one, in the top margin), at the left edge.
+  void title(std::string_view text, double font_px = 14.0);
   // A scale bar in the footer, at the drawing area's left edge: 1 m, or 5 m when 1 m would be
   // shorter than 40 px (0 picks so; a positive length is used as given).
   void scaleBar(double length_m = 0.0);

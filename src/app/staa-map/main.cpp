@@ -330,7 +330,7 @@ int runSvg(const std::string& map_file, const std::string& out_file, const std::
     explainEndpoint(result.status, from, to);
     staa::drawPath(canvas, result.path, from, to);
     caption += result.status == staa::PathStatus::kFound
-                   ? ": path " + fmt(result.length, 2) + " m"
+                   ? ": path " + fmtPoint(from) + " to " + fmtPoint(to) + ", " + fmt(result.length, 2) + " m"
                    : std::string(": ") + staa::toString(result.status);
     if (result.status != staa::PathStatus::kFound) {
       std::cout << "no path " << fmtPoint(from) << " -> " << fmtPoint(to) << ": " << staa::toString(result.status)
@@ -341,11 +341,7 @@ int runSvg(const std::string& map_file, const std::string& out_file, const std::
   canvas.scaleBar();
   const auto legend = staa::mapLegend(with_inflated, !map.goals.empty(), with_path);
   canvas.legend(legend);
-  staa::SvgStyle caption_style;
-  caption_style.fill = "#333";
-  canvas.textPx({canvas.widthPx() - canvas.options().margin_px,
-                 canvas.heightPx() - canvas.options().footer_px + 0.5 * canvas.options().margin_px - 2.0},
-                caption, 12.0, staa::TextAnchor::kEnd, caption_style);
+  canvas.title(caption);
   canvas.save(out_file);
   std::cout << "wrote " << out_file << " (" << fmt(canvas.widthPx(), 0) << " x " << fmt(canvas.heightPx(), 0)
             << " px, " << fmt(px_per_m, 1) << " px/m)\n";

@@ -3,7 +3,10 @@
 #include "geometry/clipper_ops.hpp"
 #include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
+#include "path/global_path.hpp"
 #include "path/polygon_set.hpp"
+
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -148,6 +151,53 @@ TEST(StaaStar, AvoidsAPredictedMoverOnItsWay) {
     for (const Vec2& p : bench.robot.footprint) robot.push_back(r.trajectory[d].pose().transform(p));
     EXPECT_FALSE(convexIntersect(robot, at.view())) << "depth " << d;
   }
+}
+
+}  // namespace
+}  // namespace staa
+
+namespace staa {
+namespace {
+
+// The clearance shortcut the heuristic uses must never call a segment free that the exact
+// test blocks: random segments in the local box on the office map, against the real
+// obstacles grown by the reach it is asked for.
+TEST(CollisionChecker, SegmentClearNeverVouchesForABlockedSegment) {
+  const PolygonMap office = [] {
+    PolygonMap m;
+    m.bounds = Box{{0, 0}, {27, 27}};
+    // Walls of two rooms and a pillar, enough to make most segments near something.
+    m.obstacles = {box(3, 3, 9, 3.12), box(3, 3, 3.12, 9), box(8.88, 3, 9, 5), box(8.88, 6.5, 9, 9), box(5, 5.5, 5.4, 5.9)};
+    return m;
+  }();
+  const double reach = 0.33;
+  std::vector<Polygon> real = office.obstacles;
+  for (const Polygon& w : boundsWalls(*office.bounds, 1.0)) real.push_back(w);
+  const std::vector<Polygon> grown = inflateEachToSimple(real, reach, 0.03);
+  PolygonSet real_set, grown_set;
+  real_set.assign(std::span<const Polygon>(real), PolygonSet::Options{0.5});
+  grown_set.assign(std::span<const Polygon>(grown), PolygonSet::Options{0.5});
+  LocalMap local;
+  CollisionChecker checker(paperAgentProfile(), local.config());
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int vouched = 0, tested = 0;
+  for (int pose = 0; pose < 20; ++pose) {
+    const Pose2 robot{6.0 + 2.0 * u(rng), 6.0 + 2.0 * u(rng), 3.0 * u(rng)};
+    const Vec2 path[] = {robot.position(), robot.position() + Vec2(5, 0)};
+    local.update(robot, real_set, path, 0.0);
+    checker.prepare(local);
+    for (int k = 0; k < 500; ++k) {
+      const Vec2 a = robot.transform({2.0 + 4.0 * u(rng), 4.0 * u(rng)});
+      const Vec2 b = a + Vec2(3.0 * u(rng), 3.0 * u(rng));
+      ++tested;
+      if (!checker.segmentClear(a, b, reach)) continue;
+      ++vouched;
+      ASSERT_FALSE(grown_set.pointBlocked(a)) << a.transpose();
+      ASSERT_FALSE(grown_set.segmentBlocked(a, b)) << a.transpose() << " -> " << b.transpose();
+    }
+  }
+  EXPECT_GT(vouched, tested / 10);  // and it does vouch for many
 }
 
 }  // namespace
