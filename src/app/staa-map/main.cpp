@@ -126,6 +126,7 @@ void printJson(const Json& j) {
 }
 
 std::string fmt(double v, int decimals = 3) {
+  if (std::abs(v) < 0.5 * std::pow(10.0, -decimals)) v = 0.0;  // no "-0.00"
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(decimals);

@@ -38,8 +38,8 @@ std::string readFile(const fs::path& p) {
   return s.str();
 }
 
-// The text between single quotes, as error messages show values. (Built by appending:
-// GCC 12 at -O3 warns falsely (-Wrestrict) on "'" + s + "'".)
+// The text between single quotes, as error messages show values. Strings here are built by
+// appending: GCC 12 at -O3 warns falsely (-Wrestrict) on "'" + s + "'" and " " + s.
 std::string inQuotes(const std::string& s) {
   std::string q;
   q.reserve(s.size() + 2);
@@ -80,9 +80,13 @@ class StaaMapTool : public ::testing::Test {
   // Runs the real binary with `args` (each shell-quoted), stdout and stderr captured apart.
   RunResult run(const std::vector<std::string>& args) const {
     std::string cmd = quote(STAA_MAP_EXE);
-    for (const auto& a : args) cmd += " " + quote(a);
+    for (const auto& a : args) {
+      cmd.push_back(' ');
+      cmd.append(quote(a));
+    }
     const fs::path err_file = dir_ / "stderr.txt";
-    cmd += " 2>" + quote(err_file.string());
+    cmd.append(" 2>");
+    cmd.append(quote(err_file.string()));
     RunResult r;
     FILE* pipe = popen(cmd.c_str(), "r");
     if (pipe == nullptr) return r;
