@@ -95,7 +95,8 @@ void MinimalConstruct::clearDynamicObstacles() {
 }
 
 bool MinimalConstruct::pointFree(const Vec2& p, bool with_dynamic) const {
-  return !static_.pointBlocked(p) && !(with_dynamic && dynamic_.pointBlocked(p));
+  const bool static_free = (oracle_ != nullptr && oracle_(oracle_context_, p, p)) || !static_.pointBlocked(p);
+  return static_free && !(with_dynamic && dynamic_.pointBlocked(p));
 }
 
 bool MinimalConstruct::segmentFree(const Vec2& a, const Vec2& b, bool with_dynamic) const {
@@ -435,16 +436,25 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     Node& t = nodes_[static_cast<std::size_t>(target_)];
     bool done = false;
     if (t.state == kOpen) {
-      // Is some open node's true key g + |node - start| below the start's g? Only nodes with
-      // g below it can be, and the comparison needs no square root.
-      bool lower = false;
-      for (const std::int32_t n : heap_) {
-        const Node& o = nodes_[static_cast<std::size_t>(n)];
-        const double slack = t.g - o.g;
-        if (n == target_ || slack <= 0.0) continue;
-        if ((target_pos_ - o.pos).squaredNorm() < slack * slack) {
-          lower = true;
-          break;
+      // Is some open node's true key g + |node - start| below the start's g? The heap's keys
+      // were made for the anchor; moving the start by |start - anchor| lowers no true key by
+      // more than that, so the top key minus it bounds them all (no scan). Else scan: only
+      // nodes with g below the start's can be lower, and no square root is needed.
+      double top = kInf;
+      for (std::size_t i = 0; i < std::min<std::size_t>(3, heap_.size()); ++i) {
+        if (heap_[i] != target_) top = std::min(top, nodes_[static_cast<std::size_t>(heap_[i])].f);
+      }
+      bool lower = t.g > top - (target_pos_ - key_anchor_).norm();
+      if (lower) {
+        lower = false;
+        for (const std::int32_t n : heap_) {
+          const Node& o = nodes_[static_cast<std::size_t>(n)];
+          const double slack = t.g - o.g;
+          if (n == target_ || slack <= 0.0) continue;
+          if ((target_pos_ - o.pos).squaredNorm() < slack * slack) {
+            lower = true;
+            break;
+          }
         }
       }
       if (!lower) {
@@ -468,6 +478,7 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
         node.f = node.g + (target_pos_ - node.pos).norm();
       }
       for (std::size_t i = heap_.size() / 2; i-- > 0;) heapDown(i);
+      key_anchor_ = target_pos_;
     }
   } else {
     resetSearch(goal, use_dynamic);
@@ -476,6 +487,7 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     root.pos = goal;
     root.g = 0.0;
     root.f = (start - goal).norm();
+    key_anchor_ = start;
     root.state = kOpen;
     heapPush(0);
     tree_valid_ = true;

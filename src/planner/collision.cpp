@@ -82,6 +82,30 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
     circle_radii_[i] = std::hypot(0.5 * slab, 0.5 * wid);
   }
   circle_count_ = k;
+
+  // Sort the outline points by the circle that covers them, so that a pose whose circles are
+  // partly clear only checks the points of the others.
+  std::array<Vec2, kMaxOutline> sorted{};
+  std::size_t m = 0;
+  for (std::size_t c = 0; c < circle_count_; ++c) {
+    outline_begin_[c] = m;
+    for (std::size_t q = 0; q < outline_count_; ++q) {
+      std::size_t nearest = 0;
+      for (std::size_t c2 = 1; c2 < circle_count_; ++c2) {
+        if ((outline_[q] - circle_centers_[c2]).squaredNorm() < (outline_[q] - circle_centers_[nearest]).squaredNorm()) nearest = c2;
+      }
+      if (nearest == c) sorted[m++] = outline_[q];
+    }
+  }
+  outline_begin_[circle_count_] = m;
+  outline_ = sorted;
+  // Each circle must cover its points (it covers its slab of the bounding box; the nearest
+  // centre of points on the box is that slab's): grow it if rounding says otherwise.
+  for (std::size_t c = 0; c < circle_count_; ++c) {
+    for (std::size_t q = outline_begin_[c]; q < outline_begin_[c + 1]; ++q) {
+      circle_radii_[c] = std::max(circle_radii_[c], (outline_[q] - circle_centers_[c]).norm());
+    }
+  }
 }
 
 void CollisionChecker::prepare(const LocalMap& map) {
@@ -115,29 +139,37 @@ bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) cons
   const double ax = gxx_ * p.c + gxy_ * p.s, ay = -gxx_ * p.s + gxy_ * p.c;  // robot x, y axes in grid x
   const double bx = gyx_ * p.c + gyy_ * p.s, by = -gyx_ * p.s + gyy_ * p.c;  // ... in grid y
   const double ox = gridX(p.x, p.y), oy = gridY(p.x, p.y);
-  bool clear = true;
   double margin = kFar;
-  for (std::size_t k = 0; k < circle_count_ && clear; ++k) {
+  bool clear_all = true;
+  std::array<bool, kMaxCircles> clear{};
+  for (std::size_t k = 0; k < circle_count_; ++k) {
     const Vec2& q = circle_centers_[k];
     const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
     // Outside the box the grid knows nothing: free (and no slack is claimed there).
     if (cell < 0) {
+      clear[k] = true;
       margin = 0.0;
       continue;
     }
     const double m = distance_[static_cast<std::size_t>(cell)] - circle_radii_[k];
-    clear = m >= 0.0;
+    clear[k] = m >= 0.0;
+    clear_all = clear_all && clear[k];
     margin = std::min(margin, m);
   }
-  if (slack != nullptr) *slack = clear ? margin : 0.0;
-  if (clear) return true;
+  if (slack != nullptr) *slack = clear_all ? margin : 0.0;
+  if (clear_all) return true;
   auto occupiedAt = [&](const Vec2& q) {
     const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
     return cell >= 0 && grid_[cell] != 0;
   };
   if (occupiedAt(centroid_)) return false;
-  for (std::size_t k = 0; k < outline_count_; ++k) {
-    if (occupiedAt(outline_[k])) return false;
+  // Only the outline points of the circles that are not clear (a clear circle holds no
+  // occupied cell, so neither do its points).
+  for (std::size_t c = 0; c < circle_count_; ++c) {
+    if (clear[c]) continue;
+    for (std::size_t k = outline_begin_[c]; k < outline_begin_[c + 1]; ++k) {
+      if (occupiedAt(outline_[k])) return false;
+    }
   }
   return true;
 }
@@ -146,7 +178,7 @@ bool CollisionChecker::segmentClear(const Vec2& a, const Vec2& b, double radius)
   const Vec2 d = b - a;
   const double len = d.norm();
   double t = 0.0;
-  for (int step = 0; step < 48; ++step) {
+  for (int step = 0; step < 24; ++step) {
     const Vec2 p = len > 0.0 ? Vec2(a + d * (t / len)) : a;
     const double gx = gridX(p.x(), p.y()), gy = gridY(p.x(), p.y());
     const std::ptrdiff_t cell = cellIndex(gx, gy);
@@ -154,6 +186,8 @@ bool CollisionChecker::segmentClear(const Vec2& a, const Vec2& b, double radius)
     // The grid knows nothing of obstacles beyond the box: its edges count as obstacles.
     const double to_edge = std::min(std::min(gx, grid_w_ - gx), std::min(gy, grid_h_ - gy)) * cell_;
     const double slack = std::min<double>(distance_[static_cast<std::size_t>(cell)], to_edge) - radius;
+    // Close to something the exact test decides faster than tiny steps would.
+    if (slack <= 2.0 * cell_ && t < len) return false;
     if (slack <= 0.0) return false;
     if (t >= len) return true;
     // Every point within `slack` of p is still clear (the field is 1-Lipschitz and conservative).

@@ -95,6 +95,7 @@ class CollisionChecker {
   std::size_t circle_count_ = 0;
   std::array<Vec2, kMaxOutline> outline_{};
   std::size_t outline_count_ = 0;
+  std::array<std::size_t, kMaxCircles + 1> outline_begin_{};  // outline_ grouped by circle
   Vec2 centroid_{0.0, 0.0};
   std::vector<float> distance_;  // per cell, metres, conservative
   mutable FixedPolygon scratch_;
