@@ -120,6 +120,25 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   local_.update(robot.pose(), path_.realObstacleSet(), path.path, goal.theta);
   out.local_ns = steadyClockNs() - t0;
 
+  // 3'. A baseline instead of STAA* (PD, DWA): it gives the command directly.
+  if (baseline_ != nullptr) {
+    t0 = steadyClockNs();
+    LocalContext ctx;
+    ctx.robot = robot;
+    ctx.map = &local_;
+    ctx.path = path.path;
+    ctx.obstacles = &obstacles;
+    ctx.goal = goal;
+    ctx.period_s = 1.0 / config_.rate_hz;
+    const LocalCommand cmd = baseline_->compute(ctx);
+    out.plan_ns = steadyClockNs() - t0;
+    const MotionLimits& lim = robot_.limits;
+    out.v_cmd = std::clamp(cmd.v, lim.v_min, lim.v_max);
+    out.w_cmd = std::clamp(cmd.w, -lim.w_max, lim.w_max);
+    out.state = state_ = CycleState::kDriving;
+    return out;
+  }
+
   // 3. STAA*.
   t0 = steadyClockNs();
   out.plan = staa_.plan(robot, local_, obstacles, budget);

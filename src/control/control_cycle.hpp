@@ -10,6 +10,7 @@
 //
 // Everything is sized at construction; step() allocates nothing.
 
+#include "control/local_controller.hpp"
 #include "control/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
@@ -88,6 +89,10 @@ class ControlCycle {
   const GlobalPathPlanner& pathPlanner() const { return path_; }
   std::span<const Vec2> lastPath() const { return last_path_; }
   StaaStar& planner() { return staa_; }
+  // Replaces STAA* by another local controller (the paper's baselines); null restores STAA*.
+  // The controller must outlive the cycle.
+  void setLocalController(LocalController* controller) { baseline_ = controller; }
+
   const ControlConfig& config() const { return config_; }
   const RobotProfile& robot() const { return robot_; }
   double inflation() const { return inflation_; }
@@ -112,6 +117,7 @@ class ControlCycle {
   std::array<FixedPolygon, 64> inflated_{};
   std::array<PolygonView, 64> views_{};
   std::span<const Vec2> last_path_;
+  LocalController* baseline_ = nullptr;
 };
 
 }  // namespace staa
