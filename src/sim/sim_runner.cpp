@@ -25,6 +25,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   World world(scenario);
   ControlCycle cycle(scenario.map, scenario.robot, options.control);
   cycle.setGoal(scenario.goal);
+  cycle.setLocalController(options.controller);
   DynamicObstacleSet obstacles(options.control.max_dynamic_obstacles);
   std::vector<Polygon> mover_polys(world.moverCount());
   std::vector<PolygonView> views(world.moverCount());
@@ -62,7 +63,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
       plan_us.push_back(static_cast<double>(out.plan_ns) * 1e-3);
       cycle_us.push_back(static_cast<double>(out.path_ns + out.local_ns + out.plan_ns) * 1e-3);
       path_us.push_back(static_cast<double>(out.path_ns) * 1e-3);
-      if (!options.svg_dir.empty() && k % std::max(1, options.svg_every) == 0) {
+      if (!options.svg_dir.empty() && options.controller == nullptr && k % std::max(1, options.svg_every) == 0) {
         char name[32];
         std::snprintf(name, sizeof name, "frame_%05d.svg", k);
         writeFrame(options.svg_dir / name, world, cycle, out, obstacles);

@@ -22,6 +22,8 @@ struct SimOptions {
   std::optional<std::uint32_t> budget_expansions;
   double budget_ms = 19.0;
   ControlConfig control;
+  // A baseline local controller in place of STAA* (not owned; null: STAA*).
+  LocalController* controller = nullptr;
   std::filesystem::path svg_dir;  // empty: no frames
   int svg_every = 15;             // cycles between frames
   // Called after each cycle (progress, tests); may be empty.
