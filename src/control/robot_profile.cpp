@@ -1,5 +1,7 @@
 #include "control/robot_profile.hpp"
 
+#include "map/yaml_support.hpp"
+
 #include "geometry/polygon.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -17,46 +19,20 @@ namespace {
 
 constexpr std::string_view kFormat = "staa-robot/1";
 
-std::string lineOf(const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  if (mark.line < 0) return "";
-  return " (line " + std::to_string(mark.line + 1) + ")";
-}
+using yaml_support::describe;
+using yaml_support::lineOf;
+using yaml_support::readNumber;
+std::string number(double v) { return yaml_support::formatNumber(v); }
+std::string point(const Vec2& p) { return yaml_support::formatPoint(p); }
 
-// A short, single-line description of what a node holds, for "got X" in messages.
-std::string describe(const YAML::Node& node) {
-  if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsScalar()) {
-    std::string s = node.Scalar();
-    if (s.size() > 40) s = s.substr(0, 37) + "...";
-    return "'" + s + "'";
-  }
-  if (node.IsSequence()) return "a list of " + std::to_string(node.size()) + " items";
-  return "a mapping";
-}
 
-// Shortest text that reads back to the same double.
-std::string number(double v) {
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
 
-std::string point(const Vec2& p) { return "(" + number(p.x()) + ", " + number(p.y()) + ")"; }
+
 
 [[noreturn]] void fail(const std::string& source, const std::string& key, const std::string& what) {
   throw ProfileError(source + ": " + key + ": " + what);
 }
 
-// yaml-cpp reads .inf/.nan spellings too; non-finite values are rejected by the callers.
-std::optional<double> readNumber(const YAML::Node& node) {
-  if (!node.IsScalar()) return std::nullopt;
-  try {
-    return node.as<double>();
-  } catch (const YAML::Exception&) {
-    return std::nullopt;
-  }
-}
 
 Polygon readFootprint(const YAML::Node& node, const std::string& source) {
   if (!node.IsDefined() || node.IsNull()) fail(source, "footprint", "missing (a list of [x, y] vertices in the robot frame)");

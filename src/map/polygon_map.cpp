@@ -1,5 +1,7 @@
 #include "map/polygon_map.hpp"
 
+#include "map/yaml_support.hpp"
+
 #include "geometry/polygon.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -23,63 +25,11 @@ constexpr std::string_view kFormat = "staa-polygon-map/1";
 // bound keeps every cross product in the checks below far from overflow.
 constexpr double kMaxCoordinate = 1e6;
 
-// ---- number text, both ways ----
-
-// Shortest text that reads back to the same double bit for bit (std::to_chars guarantees
-// the round trip); YAML 1.2 spellings for the non-finite values so the file stays YAML.
-std::string formatNumber(double v) {
-  if (std::isnan(v)) return ".nan";
-  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
-
-// Reads a YAML scalar as a double. std::from_chars rather than yaml-cpp's stream conversion:
-// it is locale-free, reads subnormals, and is the exact inverse of formatNumber.
-std::optional<double> readNumber(const YAML::Node& node) {
-  if (!node.IsScalar()) return std::nullopt;
-  std::string_view s = node.Scalar();
-  for (std::string_view nan : {".nan", ".NaN", ".NAN"}) {
-    if (s == nan) return std::numeric_limits<double>::quiet_NaN();
-  }
-  bool negative = false;
-  if (!s.empty() && (s.front() == '+' || s.front() == '-')) {
-    negative = s.front() == '-';
-    s.remove_prefix(1);
-  }
-  for (std::string_view inf : {".inf", ".Inf", ".INF"}) {
-    if (s == inf) return negative ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
-  }
-  // from_chars takes no sign of its own beyond '-', so parse the magnitude and apply it.
-  if (s.empty() || s.front() == '+' || s.front() == '-') return std::nullopt;
-  double v = 0.0;
-  const auto res = std::from_chars(s.data(), s.data() + s.size(), v, std::chars_format::general);
-  if (res.ec != std::errc{} || res.ptr != s.data() + s.size()) return std::nullopt;
-  return negative ? -v : v;
-}
-
-// ---- messages ----
-
-std::string lineOf(const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  if (mark.line < 0) return "";
-  return " (line " + std::to_string(mark.line + 1) + ")";
-}
-
-// A short, single-line description of what a node holds, for "expected X, got Y" messages.
-std::string describe(const YAML::Node& node) {
-  if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsScalar()) {
-    std::string s = node.Scalar();
-    if (s.size() > 40) s = s.substr(0, 37) + "...";
-    return "'" + s + "'";
-  }
-  if (node.IsSequence()) return "a list of " + std::to_string(node.size()) + " items";
-  return "a mapping";
-}
-
-std::string point(const Vec2& p) { return "(" + formatNumber(p.x()) + ", " + formatNumber(p.y()) + ")"; }
+using yaml_support::describe;
+using yaml_support::formatNumber;
+using yaml_support::lineOf;
+using yaml_support::readNumber;
+std::string point(const Vec2& p) { return yaml_support::formatPoint(p); }
 
 [[noreturn]] void fail(const std::string& source, const std::string& where, const std::string& what) {
   throw MapError(source + ": " + (where.empty() ? "" : where + ": ") + what);

@@ -1,5 +1,7 @@
 #include "sim/scenario.hpp"
 
+#include "map/yaml_support.hpp"
+
 #include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
 #include "sim/footprint.hpp"
@@ -22,30 +24,14 @@ namespace fs = std::filesystem;
 
 constexpr std::string_view kFormat = "staa-scenario/1";
 
-std::string lineOf(const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  if (mark.line < 0) return "";
-  return " (line " + std::to_string(mark.line + 1) + ")";
-}
+using yaml_support::describe;
+using yaml_support::lineOf;
+std::string number(double v) { return yaml_support::formatNumber(v); }
+std::string point(const Vec2& p) { return yaml_support::formatPoint(p); }
 
-std::string describe(const YAML::Node& node) {
-  if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsScalar()) {
-    std::string s = node.Scalar();
-    if (s.size() > 40) s = s.substr(0, 37) + "...";
-    return "'" + s + "'";
-  }
-  if (node.IsSequence()) return "a list of " + std::to_string(node.size()) + " items";
-  return "a mapping";
-}
 
-std::string number(double v) {
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
 
-std::string point(const Vec2& p) { return "(" + number(p.x()) + ", " + number(p.y()) + ")"; }
+
 
 std::string indexed(const std::string& list, std::size_t i) { return list + "[" + std::to_string(i) + "]"; }
 

@@ -1,0 +1,26 @@
+#pragma once
+// What every reader of our YAML files (maps, robot profiles, scenarios, ROS map metadata)
+// needs for exact numbers and clear messages: one strict, locale-free number reader, the
+// shortest round-trip number writer, and the "(line N)" / "got X" parts of error messages.
+
+#include "geometry/types.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <string>
+
+namespace staa::yaml_support {
+
+// " (line N)" for a node that has a position in its file, else "".
+std::string lineOf(const YAML::Node& node);
+// A short, single-line description of what a node holds, for "expected X, got Y" messages.
+std::string describe(const YAML::Node& node);
+// Shortest text that reads back to the same double bit for bit; YAML spellings for .nan/.inf.
+std::string formatNumber(double v);
+std::string formatPoint(const Vec2& p);
+// A YAML scalar as a double (std::from_chars: locale-free, subnormals, the exact inverse of
+// formatNumber; .nan and .inf spellings too). Callers reject non-finite values themselves.
+std::optional<double> readNumber(const YAML::Node& node);
+
+}  // namespace staa::yaml_support
