@@ -12,6 +12,8 @@
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 
+#include "app/cli_support.hpp"
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -38,23 +40,11 @@ using Clock = std::chrono::steady_clock;
 
 constexpr int kExitBadInput = 2;
 
-// Bad command-line input: what() is the whole message after "staa-map: ".
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using staa::cli::InputError;
 
 // ---- parsing of values (std::from_chars: no locale, no trailing garbage) ----
 
-std::optional<double> parseDouble(std::string_view text) {
-  // from_chars rejects a leading '+'; accept it as people write "+1.5".
-  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
-  double v = 0.0;
-  const char* end = text.data() + text.size();
-  auto [ptr, ec] = std::from_chars(text.data(), end, v);
-  if (ec != std::errc{} || ptr != end || text.empty() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
+using staa::cli::parseDouble;
 
 Vec2 parseXY(const std::string& option, const std::string& text) {
   const auto comma = text.find(',');

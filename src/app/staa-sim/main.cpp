@@ -15,6 +15,8 @@
 #include "sim/sim_runner.hpp"
 #include "sim/world.hpp"
 
+#include "app/cli_support.hpp"
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -46,31 +48,13 @@ constexpr int kExitRunFailed = 1;
 // The paper's wall-clock budget: 19 ms of a 33 ms period at 30 Hz; other rates scale it.
 constexpr double kDefaultBudgetMsAt30Hz = 19.0;
 
-// Bad command-line input: what() is the whole message after "staa-sim: ".
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using staa::cli::InputError;
 
 // ---- parsing of values (std::from_chars: no locale, no trailing garbage) ----
 
-std::optional<double> parseDouble(std::string_view text) {
-  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
-  double v = 0.0;
-  const char* end = text.data() + text.size();
-  auto [ptr, ec] = std::from_chars(text.data(), end, v);
-  if (ec != std::errc{} || ptr != end || text.empty() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
+using staa::cli::parseDouble;
 
-std::optional<std::uint64_t> parseUnsigned(std::string_view text) {
-  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
-  std::uint64_t v = 0;
-  const char* end = text.data() + text.size();
-  auto [ptr, ec] = std::from_chars(text.data(), end, v);
-  if (ec != std::errc{} || ptr != end || text.empty()) return std::nullopt;
-  return v;
-}
+using staa::cli::parseUnsigned;
 
 double parsePositive(const std::string& option, const std::string& text, std::string_view what) {
   const auto v = parseDouble(text);
