@@ -16,6 +16,8 @@
 #include "sim/world.hpp"
 
 #include "app/cli_support.hpp"
+#include "control/dwa_controller.hpp"
+#include "control/pd_controller.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -26,6 +28,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <iostream>
 #include <limits>
 #include <optional>
@@ -273,6 +276,12 @@ int simulate(Request& rq) {
     };
   }
 
+  // The paper's baselines run in the same cycle in place of STAA* (owned here, for the run).
+  std::unique_ptr<staa::LocalController> baseline;
+  if (rq.controller == "pd") baseline = std::make_unique<staa::PdController>(rq.scenario.robot);
+  if (rq.controller == "dwa") baseline = std::make_unique<staa::DwaController>(rq.scenario.robot, rq.options.control.local);
+  rq.options.controller = baseline.get();
+
   staa::SimResult result;
   try {
     result = staa::runSingleRobot(rq.scenario, rq.options);
@@ -312,7 +321,8 @@ int run(int argc, char** argv) {
   app.add_option("--goal", goal_text, "Goal pose X,Y,TH (metres, radians)");
   app.add_option("--robot", robot_file, "Robot profile (staa-robot/1 YAML; default: the paper's agent, or the "
                                         "scenario's profile)");
-  app.add_option("--controller", controller, "staa, dwa or pd (only staa is available yet)")->capture_default_str();
+  app.add_option("--controller", controller, "staa, dwa (predictive dynamic window) or pd (carrot + force field)")
+      ->capture_default_str();
   app.add_option("--mode", mode, "cooperative or ghost (with one agent both are the same)")->capture_default_str();
   app.add_option("--agents", agents_text, "Number of agents (only 1 is available yet)")->capture_default_str();
   app.add_option("--duration", duration_text, "Simulated seconds")->capture_default_str();
@@ -342,10 +352,7 @@ int run(int argc, char** argv) {
   rq.quiet = quiet;
 
   // What is not implemented yet is refused by name before anything is loaded.
-  if (controller == "dwa" || controller == "pd") {
-    throw InputError("--controller: controller '" + controller + "' is not available yet (issue 4)");
-  }
-  if (controller != "staa") {
+  if (controller != "staa" && controller != "dwa" && controller != "pd") {
     throw InputError("--controller: expected staa, dwa or pd, got '" + controller + "'");
   }
   rq.controller = controller;

@@ -1,6 +1,9 @@
 // The 30 Hz cycle allocates nothing after start-up: 1,000 cycles of a busy scene (the office,
-// three people walking through it) with operator new counted around every step.
+// three people walking through it) with operator new counted around every step, for STAA*
+// with both heuristics and for the PD and DWA baselines.
 #include "control/control_cycle.hpp"
+#include "control/dwa_controller.hpp"
+#include "control/pd_controller.hpp"
 #include "map/generate.hpp"
 #include "sim/world.hpp"
 
@@ -26,10 +29,21 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
     s.movers.push_back(m);
   }
   World world(s);
-  for (const auto& heuristic : {HeuristicKind::kPathRtr, HeuristicKind::kDijkstraRtr}) {
+  // STAA* with two heuristics, then the two baselines in the same cycle.
+  PdController pd(s.robot);
+  DwaController dwa(s.robot, LocalMapConfig{});
+  struct Variant {
+    const char* name;
+    HeuristicKind heuristic;
+    LocalController* baseline;
+  };
+  for (const Variant& variant : {Variant{"staa path-rtr", HeuristicKind::kPathRtr, nullptr},
+                                 Variant{"staa dijkstra-rtr", HeuristicKind::kDijkstraRtr, nullptr},
+                                 Variant{"pd", HeuristicKind::kPathRtr, &pd}, Variant{"dwa", HeuristicKind::kPathRtr, &dwa}}) {
     ControlConfig config;
-    config.staa.heuristic.kind = heuristic;
+    config.staa.heuristic.kind = variant.heuristic;
     ControlCycle cycle(s.map, s.robot, config);
+    cycle.setLocalController(variant.baseline);
     cycle.setGoal(s.goal);
     DynamicObstacleSet obstacles(config.max_dynamic_obstacles);
     std::vector<Polygon> polys(world.moverCount());
@@ -51,14 +65,14 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
       obstacles.set(views, velocities);
       const CycleOutput out = cycle.step(in, PlannerBudget::expansions(300));
       allocations += scope.count();
-      planned += out.planned;
+      planned += out.planned || (variant.baseline != nullptr && out.state == CycleState::kDriving);
       world.step(1.0 / 30.0, out.v_cmd, out.w_cmd);
       if (out.state == CycleState::kReached) {  // drive back and forth to keep it busy
         cycle.setGoal(cycle.goal()->x > 10.0 ? s.start : s.goal);
       }
     }
-    EXPECT_EQ(allocations, 0u) << toString(heuristic);
-    EXPECT_GT(planned, 900) << toString(heuristic);
+    EXPECT_EQ(allocations, 0u) << variant.name;
+    EXPECT_GT(planned, 900) << variant.name;
   }
 }
 

@@ -256,7 +256,7 @@ TEST_F(StaaSim, BadInputExitsTwoNamingTheValue) {
       {with(ok_goal, {"--rate", "0"}), "--rate: expected a control rate in Hz (a finite number > 0), got '0'"},
       {with(ok_goal, {"--budget-ms", "5", "--budget-expansions", "10"}), "--budget-ms 5 and --budget-expansions 10"},
       {with(ok_goal, {"--heuristic", "foo"}), "'foo'"},
-      {with(ok_goal, {"--controller", "dwa"}), "controller 'dwa' is not available yet (issue 4)"},
+      {with(ok_goal, {"--controller", "mpc"}), "expected staa, dwa or pd, got 'mpc'"},
       {with(ok_goal, {"--agents", "3"}), "--agents: 3"},
       {{"--map", "missing.yaml", "--start", "1,1,0", "--goal", "9,9,1.57"}, "missing.yaml"},
       {{"--map", "map.yaml", "--start", "5,5,0", "--goal", "9,9,1.57"}, "--start (5.00, 5.00, 0.00)"},
