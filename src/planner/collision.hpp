@@ -64,6 +64,9 @@ class CollisionChecker {
   // "don't know": near an obstacle, outside the local box, or after too many steps.
   bool segmentClear(const Vec2& a, const Vec2& b, double radius) const;
 
+  // This cycle's conservative distance (m) from each grid cell to the nearest occupied one.
+  std::span<const float> distanceField() const { return distance_; }
+
   double circumradius() const { return circumradius_; }
   std::span<const Vec2> outline() const { return {outline_.data(), outline_count_}; }
   const Polygon& footprint() const { return footprint_; }

@@ -116,7 +116,7 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
     }
     dynamic_search_[static_cast<std::size_t>(k)].setDynamicObstacles(std::span<const PolygonView>(views_.data(), n));
   }
-  if (config_.kind == HeuristicKind::kDijkstraRtr) buildDijkstra(map);
+  if (config_.kind == HeuristicKind::kDijkstraRtr) buildDijkstra(map, clearance);
 }
 
 double Heuristic::evaluate(const UnicycleState& s, int depth) {
@@ -161,10 +161,16 @@ double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
   return pathRtr(r.path, s.theta, goal_.theta, limits_);
 }
 
-void Heuristic::buildDijkstra(const LocalMap& map) {
+void Heuristic::buildDijkstra(const LocalMap& map, const CollisionChecker* clearance) {
   const int w = map.width(), h = map.height();
   // Free cells: farther from every occupied cell than the robot's radius.
-  conservativeDistanceField(map.grid(), w, h, map.config().cell_m, dijkstra_);
+  // The collision checker has this cycle's distance field already; compute one only without it.
+  const std::span<const float> field = clearance != nullptr ? clearance->distanceField() : std::span<const float>{};
+  if (field.size() == dijkstra_.size()) {
+    std::copy(field.begin(), field.end(), dijkstra_.begin());
+  } else {
+    conservativeDistanceField(map.grid(), w, h, map.config().cell_m, dijkstra_);
+  }
   for (std::size_t i = 0; i < free_.size(); ++i) free_[i] = dijkstra_[i] >= config_.static_inflation_m ? 1 : 0;
   const float inf = std::numeric_limits<float>::infinity();
   std::fill(dijkstra_.begin(), dijkstra_.end(), inf);

@@ -76,7 +76,7 @@ class Heuristic {
  private:
   double evaluatePath(const UnicycleState& s, int depth);
   double evaluateDijkstra(const UnicycleState& s);
-  void buildDijkstra(const LocalMap& map);
+  void buildDijkstra(const LocalMap& map, const CollisionChecker* clearance);
 
   HeuristicConfig config_;
   MotionLimits limits_;
