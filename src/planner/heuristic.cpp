@@ -130,6 +130,16 @@ double Heuristic::evaluate(const UnicycleState& s, int depth) {
   return h + braking(s.v, limits_.a_max, v_top) + braking(s.w, limits_.b_max, limits_.w_max);
 }
 
+double Heuristic::lowerBound(const UnicycleState& s) const {
+  const double fastest = std::max(limits_.v_max, -limits_.v_min);
+  double h = (goal_.position() - s.position()).norm() / fastest + std::abs(wrapAngle(goal_.theta - s.theta)) / limits_.w_max;
+  if (config_.kind == HeuristicKind::kPathEuclid) h = (goal_.position() - s.position()).norm() / limits_.v_max;
+  if (!(config_.stop_at_goal && final_goal_)) return h;
+  auto braking = [](double vel, double acc, double top) { return std::abs(vel) / acc - vel * vel / (2.0 * acc * top); };
+  const double v_top = s.v >= 0.0 ? limits_.v_max : -limits_.v_min;
+  return h + braking(s.v, limits_.a_max, v_top) + braking(s.w, limits_.b_max, limits_.w_max);
+}
+
 double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
   const Vec2 p = s.position();
   const Vec2 g = goal_.position();

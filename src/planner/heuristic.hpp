@@ -65,6 +65,10 @@ class Heuristic {
 
   // h for a state at search depth `depth` (time depth * dt).
   double evaluate(const UnicycleState& s, int depth);
+  // A lower bound of evaluate() for any depth, at the cost of a square root: the straight
+  // distance at the faster of the two top speeds plus the net heading change (plus the same
+  // braking term at the final goal).
+  double lowerBound(const UnicycleState& s) const;
   // Whether the goal of this cycle is the final goal (set by prepare from the local map).
   bool finalGoal() const { return final_goal_; }
 

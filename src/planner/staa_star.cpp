@@ -120,10 +120,32 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
       break;
     }
     const std::int32_t id = pop();
+    std::size_t cell = 0;
+    const bool in_box = closedIndex(nodes_[static_cast<std::size_t>(id)].s.x, nodes_[static_cast<std::size_t>(id)].s.y,
+                                    nodes_[static_cast<std::size_t>(id)].s.theta, cell);
+    if (config_.lazy_heuristic && !nodes_[static_cast<std::size_t>(id)].evaluated) {
+      // Lazy evaluation: the state was queued under a lower bound of h. A state whose cell is
+      // closed meanwhile is dropped unevaluated; otherwise its true h is computed now and it
+      // goes back into the queue under its true f (not counted as a pop: the paper's pop is
+      // the one that closes or drops it).
+      if (in_box && closed_[cell] == generation_) {
+        ++st.pops;
+        continue;
+      }
+      Node& n = nodes_[static_cast<std::size_t>(id)];
+      const std::int64_t th = timing_ ? steadyClockNs() : 0;
+      n.h = heuristic_.evaluate(n.s, n.depth);
+      if (timing_) st.heuristic_ns += steadyClockNs() - th;
+      ++st.heuristic_calls;
+      n.f = n.g + n.h;
+      n.evaluated = true;
+      if (n.h < nodes_[static_cast<std::size_t>(best)].h) best = id;
+      push(id);
+      continue;
+    }
     ++st.pops;
     const Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool may be appended below
-    std::size_t cell = 0;
-    if (closedIndex(node.s.x, node.s.y, node.s.theta, cell)) {
+    if (in_box) {
       if (closed_[cell] == generation_) continue;  // its cell was closed by an earlier pop
       closed_[cell] = generation_;
     }
@@ -177,11 +199,17 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
         const double dist = collision_.distanceToDynamic(child.position(), obstacles, t);
         g += config_.w_dynamic * std::max(1.0 - dist / config_.proximity_range_m, 0.0);
       }
-      const std::int64_t th = timing_ ? steadyClockNs() : 0;
-      const double h = heuristic_.evaluate(child, depth);
-      if (timing_) st.heuristic_ns += steadyClockNs() - th;
-      ++st.heuristic_calls;
+      double h;
+      if (config_.lazy_heuristic) {
+        h = heuristic_.lowerBound(child);  // the true h when the state is popped
+      } else {
+        const std::int64_t th = timing_ ? steadyClockNs() : 0;
+        h = heuristic_.evaluate(child, depth);
+        if (timing_) st.heuristic_ns += steadyClockNs() - th;
+        ++st.heuristic_calls;
+      }
       Node c;
+      c.evaluated = !config_.lazy_heuristic;
       c.s = child;
       c.g = g;
       c.h = h;
@@ -192,7 +220,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
       nodes_.push_back(c);
       const auto cid = static_cast<std::int32_t>(nodes_.size() - 1);
       push(cid);
-      if (h < nodes_[static_cast<std::size_t>(best)].h) best = cid;
+      if (c.evaluated && h < nodes_[static_cast<std::size_t>(best)].h) best = cid;
     }
   }
 

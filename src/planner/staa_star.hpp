@@ -36,6 +36,11 @@ struct StaaConfig {
   bool check_swept = true;          // check the motion between poses, not only the end pose
   std::size_t max_nodes = 100000;   // node pool (the search stops pushing when it is full)
   HeuristicConfig heuristic;
+  // Compute h when a state is popped instead of when it is generated (queued under a lower
+  // bound meanwhile). The order of expansions is that of true f; most generated states are
+  // never popped, so far fewer heuristic queries are made. The lowest-h state an aborted
+  // search returns is then chosen among the evaluated states only. Off: the paper's way.
+  bool lazy_heuristic = false;
 };
 
 struct PlanStats {
@@ -100,6 +105,7 @@ class StaaStar {
     std::int32_t parent = -1;
     std::uint16_t depth = 0;
     std::uint8_t action = 0;
+    bool evaluated = true;  // h is the true heuristic (false: a lower bound, lazy mode)
   };
   struct QueueEntry {
     double f;

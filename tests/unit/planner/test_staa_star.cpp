@@ -202,3 +202,30 @@ TEST(CollisionChecker, SegmentClearNeverVouchesForABlockedSegment) {
 
 }  // namespace
 }  // namespace staa
+
+namespace staa {
+namespace {
+
+// The lazy option evaluates h only for popped states: far fewer queries, the same early
+// finish, and the returned state is still the lowest-h one it evaluated.
+TEST(StaaStar, LazyHeuristicQueriesFarLessAndStillFinishes) {
+  Bench bench(paperAgentProfile(), {}, 0.5);
+  const UnicycleState start{0.0, 0.0, 0.0, 0.0, 0.0};
+  bench.update(start, Vec2(3.0, 0.0));
+  StaaStar eager = bench.planner();
+  const PlanResult a = eager.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(8000));
+  bench.config.lazy_heuristic = true;
+  StaaStar lazy = bench.planner();
+  const PlanResult b = lazy.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(8000));
+  EXPECT_EQ(a.outcome, PlanResult::Outcome::kFinished);
+  EXPECT_EQ(b.outcome, PlanResult::Outcome::kFinished);
+  EXPECT_LT(b.best_h, 0.1);
+  EXPECT_LT(b.stats.heuristic_calls * 3, a.stats.heuristic_calls);
+  // The lower bound never exceeds the true value (else the order of expansions would change).
+  lazy.forEachEdge([&](const UnicycleState&, const UnicycleState& s) {
+    EXPECT_LE(lazy.heuristic().lowerBound(s), lazy.heuristic().evaluate(s, 4) + 1e-12);
+  });
+}
+
+}  // namespace
+}  // namespace staa
