@@ -211,7 +211,7 @@ namespace {
 TEST(StaaStar, LazyHeuristicQueriesFarLessAndStillFinishes) {
   Bench bench(paperAgentProfile(), {}, 0.5);
   const UnicycleState start{0.0, 0.0, 0.0, 0.0, 0.0};
-  bench.update(start, Vec2(3.0, 0.0));
+  bench.update(start, Vec2(1.5, 0.0));  // as in FinishesEarlyWhenTheGoalIsReachable
   StaaStar eager = bench.planner();
   const PlanResult a = eager.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(8000));
   bench.config.lazy_heuristic = true;
