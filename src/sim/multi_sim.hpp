@@ -12,7 +12,8 @@
 //
 // The agents see each other through a DynamicObstacleSet built from the simulation (ground
 // truth); real perception can replace that seam later. Deterministic for a given seed with
-// an expansion budget.
+// an expansion budget. How contacts are resolved (agents stop at the last free point of
+// their motion and can always back away): sim/multi_world.hpp.
 
 #include "control/control_cycle.hpp"
 #include "map/polygon_map.hpp"
@@ -26,6 +27,8 @@
 #include <vector>
 
 namespace staa {
+
+class MultiWorld;
 
 enum class SimMode : std::uint8_t { kCooperative, kGhost };
 enum class ControllerKind : std::uint8_t { kStaa, kDwa, kPd };
@@ -47,6 +50,15 @@ struct MultiSimOptions {
   ControlConfig control;           // heuristic kind in control.staa.heuristic.kind
   // Called once per simulated second (progress); may be empty.
   std::function<void(double sim_time_s)> on_second;
+
+  // Scripted runs (tests, demonstrations). `starts`: one start pose per agent (empty: distinct
+  // random goal locations of the map with random headings). `goal_sequences`: per agent, the
+  // goals it drives to in turn, cycling (empty: random goals of the map). With a
+  // sequence the map needs no goals.
+  std::vector<Pose2> starts;
+  std::vector<std::vector<Vec2>> goal_sequences;
+  // Called after every simulation step with the world (tests, drawing); may be empty.
+  std::function<void(const MultiWorld& world)> on_step;
 };
 
 struct AgentResult {

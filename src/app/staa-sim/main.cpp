@@ -16,6 +16,7 @@
 #include "sim/world.hpp"
 
 #include "app/cli_support.hpp"
+#include "app/staa-sim/experiment_command.hpp"
 #include "control/dwa_controller.hpp"
 #include "control/pd_controller.hpp"
 
@@ -303,8 +304,7 @@ int simulate(Request& rq) {
 
 int run(int argc, char** argv) {
   if (argc > 1 && std::string_view(argv[1]) == "experiment") {
-    throw InputError("'staa-sim experiment' is not available yet (a later issue); run one robot with "
-                     "--map MAP --start X,Y,TH --goal X,Y,TH or --scenario FILE");
+    return staa::runExperimentCommand(argc - 1, argv + 1);
   }
 
   CLI::App app{"staa-sim: run the STAA* control cycle against a simulated world: one robot from --start to "

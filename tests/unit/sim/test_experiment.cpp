@@ -1,0 +1,341 @@
+// The experiment runner (Sec. IV-B/IV-C): a tiny real experiment on the generated clutter map
+// (results.json keys, run count, determinism across threads, the figure), the plots on a
+// hand-made result set, and `staa-sim experiment` run for real.
+
+#include "map/polygon_map.hpp"
+#include "sim/experiment.hpp"
+#include "sim/experiment_plots.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace staa {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using ::testing::HasSubstr;
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+fs::path freshDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("staa-experiment-test-" + std::to_string(::getpid()) + "-" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// One small generated map, PD and STAA*, one mode, one agent, two runs of 3 s with an
+// expansion budget (reproducible), two threads.
+ExperimentSpec tinySpec() {
+  ExperimentSpec spec;
+  spec.maps.push_back(loadExperimentMap("clutter", 1));
+  spec.controllers = {ControllerKind::kPd, ControllerKind::kStaa};
+  spec.modes = {SimMode::kCooperative};
+  spec.agents = {1};
+  spec.runs = 2;
+  spec.duration_s = 3.0;
+  spec.budget_expansions = 200;
+  spec.jobs = 2;
+  return spec;
+}
+
+// Everything but the wall-clock planner times, which differ from run to run.
+Json withoutTimes(Json runs) {
+  for (Json& r : runs) r["planner"].erase("plan_us");
+  return runs;
+}
+
+std::vector<double> attributeValues(const std::string& svg, const std::string& css_class, const std::string& attr) {
+  std::vector<double> values;
+  const std::regex re("class=\"" + css_class + "\"[^>]*? " + attr + "=\"(-?[0-9.]+)\"");
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), re); it != std::sregex_iterator(); ++it) {
+    values.push_back(std::stod((*it)[1].str()));
+  }
+  return values;
+}
+
+TEST(Experiment, TinyExperimentWritesEveryRunWithTheRequiredKeysAndAFigure) {
+  const fs::path dir = freshDir("tiny");
+  const ExperimentSpec spec = tinySpec();
+  int calls = 0, last_done = 0;
+  const std::vector<ExperimentRun> runs = runExperiment(spec, [&](const ExperimentProgress& p) {
+    ++calls;
+    EXPECT_EQ(p.total, 4);
+    EXPECT_EQ(p.done, last_done + 1);
+    last_done = p.done;
+    EXPECT_GE(p.remaining_s, 0.0);
+    ASSERT_NE(p.last, nullptr);
+  });
+  EXPECT_EQ(calls, 4);
+  ASSERT_EQ(runs.size(), 4U);
+
+  const fs::path file = writeExperimentResults(dir, spec, runs);
+  EXPECT_EQ(file, dir / "results.json");
+  const Json doc = Json::parse(readFile(file));
+  ASSERT_EQ(doc["runs"].size(), 4U);
+  for (const Json& r : doc["runs"]) {
+    for (const char* key : {"map", "controller", "mode", "agents", "run", "seed", "duration_s", "goals_reached",
+                            "collisions", "score", "planner", "heuristic"}) {
+      EXPECT_TRUE(r.contains(key)) << key << " in " << r.dump();
+    }
+    for (const char* key : {"calls", "expansions", "successors", "finished_early_ratio", "depth_mean", "plan_us"}) {
+      EXPECT_TRUE(r["planner"].contains(key)) << key;
+    }
+    for (const char* key : {"mean", "p50", "p99"}) {
+      EXPECT_TRUE(r["planner"]["expansions"].contains(key));
+      EXPECT_TRUE(r["planner"]["successors"].contains(key));
+    }
+    for (const char* key : {"p50", "p99", "max"}) EXPECT_TRUE(r["planner"]["plan_us"].contains(key));
+    EXPECT_EQ(r["map"], "clutter");
+    EXPECT_EQ(r["score"].get<int>(), r["goals_reached"].get<int>() - r["collisions"].get<int>());
+    EXPECT_EQ(r["seed"].get<int>(), 1 + r["run"].get<int>());
+    EXPECT_NEAR(r["duration_s"].get<double>(), 3.0, 0.05);
+    if (r["controller"] == "staa") {
+      EXPECT_EQ(r["heuristic"], "path-rtr");
+      EXPECT_GT(r["planner"]["calls"].get<int>(), 0);
+      EXPECT_LE(r["planner"]["expansions"]["p99"].get<double>(), 200.0);
+    } else {
+      EXPECT_EQ(r["controller"], "pd");
+      EXPECT_EQ(r["planner"]["calls"].get<int>(), 0);
+    }
+  }
+  ASSERT_EQ(doc["summary"].size(), 2U);
+  for (const Json& c : doc["summary"]) {
+    EXPECT_EQ(c["runs"], 2);
+    for (const char* key : {"goals_reached", "collisions", "score"}) {
+      EXPECT_TRUE(c[key].contains("mean"));
+      EXPECT_TRUE(c[key].contains("stddev"));
+    }
+  }
+  EXPECT_EQ(doc["spec"]["budget"]["kind"], "expansions");
+  EXPECT_EQ(doc["spec"]["runs"], 2);
+
+  const ExperimentPlots plots = writeExperimentPlots(dir, spec, runs);
+  const std::string svg = readFile(dir / "scores.svg");
+  EXPECT_THAT(svg, HasSubstr("<svg"));
+  // One bar per cell (map x mode x agents x controller), drawn even when its score is zero.
+  EXPECT_EQ(attributeValues(svg, "bar-score", "height").size(), 2U);
+  EXPECT_THAT(svg, HasSubstr("Clutter"));
+  EXPECT_THAT(svg, HasSubstr("STAA*"));
+  EXPECT_THAT(svg, HasSubstr("PD"));
+  EXPECT_FALSE(fs::exists(dir / "heuristics.svg"));  // one heuristic only
+  EXPECT_FALSE(plots.files.empty());
+  fs::remove_all(dir);
+}
+
+TEST(Experiment, IdenticalResultsWhenRunTwiceOnDifferentThreadCounts) {
+  ExperimentSpec spec = tinySpec();
+  const Json a = Json::parse(experimentJson(spec, runExperiment(spec)));
+  spec.jobs = 1;
+  const Json b = Json::parse(experimentJson(spec, runExperiment(spec)));
+  EXPECT_EQ(withoutTimes(a["runs"]), withoutTimes(b["runs"]));
+  EXPECT_EQ(a["summary"], b["summary"]);
+}
+
+TEST(Experiment, PlanCoversTheMatrixWithStaaOncePerHeuristic) {
+  ExperimentSpec spec;
+  spec.maps.push_back({"a", PolygonMap{"a", std::nullopt, {}, {{1.0, 1.0}}}});
+  spec.maps.push_back({"b", PolygonMap{"b", std::nullopt, {}, {{1.0, 1.0}}}});
+  spec.heuristics = {HeuristicKind::kPathRtr, HeuristicKind::kDijkstraRtr};
+  spec.runs = 2;
+  spec.seed = 7;
+  const std::vector<ExperimentRun> plan = planExperiment(spec);
+  // 2 maps x 2 modes x 3 agent counts x (PD + DWA + 2 STAA* heuristics) x 2 runs.
+  EXPECT_EQ(plan.size(), 2U * 2U * 3U * 4U * 2U);
+  for (const ExperimentRun& r : plan) {
+    EXPECT_EQ(r.seed, 7U + static_cast<unsigned>(r.run));
+    EXPECT_EQ(r.heuristic.has_value(), r.controller == ControllerKind::kStaa);
+  }
+}
+
+ExperimentCell cell(const char* map, ControllerKind c, SimMode mode, int agents, double goals, double collisions,
+                    std::optional<HeuristicKind> h = std::nullopt) {
+  ExperimentCell x;
+  x.map = map;
+  x.controller = c;
+  x.mode = mode;
+  x.agents = agents;
+  x.heuristic = c == ControllerKind::kStaa && !h ? std::optional(HeuristicKind::kPathRtr) : h;
+  x.runs = 1;
+  x.goals.mean = goals;
+  x.collisions.mean = collisions;
+  x.score.mean = goals - collisions;
+  return x;
+}
+
+TEST(ExperimentPlots, BarHeightsAreProportionalToScoreAndCollisions) {
+  // One panel: 1 agent, PD 10 goals 4 collisions, DWA 6 goals 1, STAA* 8 goals 0.
+  const std::vector<ExperimentCell> cells{
+      cell("office", ControllerKind::kPd, SimMode::kCooperative, 1, 10.0, 4.0),
+      cell("office", ControllerKind::kDwa, SimMode::kCooperative, 1, 6.0, 1.0),
+      cell("office", ControllerKind::kStaa, SimMode::kCooperative, 1, 8.0, 0.0),
+      // Another heuristic's STAA* cell is not in Fig. 5.
+      cell("office", ControllerKind::kStaa, SimMode::kCooperative, 1, 1.0, 0.0, HeuristicKind::kPathEuclid),
+  };
+  const std::string svg = controllerScoresSvg(cells, HeuristicKind::kPathRtr);
+  const std::vector<double> score = attributeValues(svg, "bar-score", "height");
+  const std::vector<double> black = attributeValues(svg, "bar-collisions", "height");
+  ASSERT_EQ(score.size(), 3U);  // PD, DWA, STAA*, in that order
+  ASSERT_EQ(black.size(), 2U);  // STAA* had none
+  const double px = score[0] / 6.0;
+  EXPECT_GT(px, 0.0);
+  EXPECT_NEAR(score[1], 5.0 * px, 0.01);
+  EXPECT_NEAR(score[2], 8.0 * px, 0.01);
+  EXPECT_NEAR(black[0], 4.0 * px, 0.01);
+  EXPECT_NEAR(black[1], 1.0 * px, 0.01);
+  // The colours follow the legend: PD's bar is PD's colour.
+  EXPECT_THAT(svg, HasSubstr("data-goals=\"10\" data-collisions=\"4\""));
+  EXPECT_THAT(svg, HasSubstr("1 agent"));
+  EXPECT_THAT(svg, HasSubstr("Office"));
+}
+
+TEST(ExperimentPlots, CooperativeRowIsAboveGhostRowAndHeuristicsFigureShowsStaaOnly) {
+  const std::vector<ExperimentCell> cells{
+      cell("clutter", ControllerKind::kStaa, SimMode::kGhost, 3, 4.0, 2.0),
+      cell("clutter", ControllerKind::kStaa, SimMode::kCooperative, 3, 5.0, 0.0),
+      cell("clutter", ControllerKind::kStaa, SimMode::kGhost, 3, 3.0, 1.0, HeuristicKind::kDijkstraRtr),
+      cell("clutter", ControllerKind::kStaa, SimMode::kCooperative, 3, 6.0, 0.0, HeuristicKind::kDijkstraRtr),
+      cell("clutter", ControllerKind::kDwa, SimMode::kGhost, 3, 9.0, 9.0),
+  };
+  const std::string svg = heuristicScoresSvg(cells);
+  EXPECT_EQ(attributeValues(svg, "bar-score", "height").size(), 4U);  // DWA left out
+  EXPECT_THAT(svg, HasSubstr("Path RTR"));
+  EXPECT_THAT(svg, HasSubstr("Dijkstra RTR"));
+  EXPECT_THAT(svg, ::testing::Not(HasSubstr("DWA")));
+  // The cooperative panel's title is drawn higher (smaller y) than the ghost panel's.
+  const std::regex title_y("y=\"([0-9.]+)\"[^>]*>Clutter \u2014 (cooperative|ghost)<");
+  double coop_y = -1.0, ghost_y = -1.0;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), title_y); it != std::sregex_iterator(); ++it) {
+    ((*it)[2] == "cooperative" ? coop_y : ghost_y) = std::stod((*it)[1].str());
+  }
+  ASSERT_GT(coop_y, 0.0);
+  ASSERT_GT(ghost_y, 0.0);
+  EXPECT_LT(coop_y, ghost_y);
+}
+
+TEST(ExperimentPlots, NegativeScoreDrawsItsBarBelowZeroAndTheCollisionsOverIt) {
+  const std::vector<ExperimentCell> cells{cell("apartment", ControllerKind::kPd, SimMode::kGhost, 5, 2.0, 5.0)};
+  const std::string svg = controllerScoresSvg(cells, HeuristicKind::kPathRtr);
+  const std::vector<double> score = attributeValues(svg, "bar-score", "height");
+  const std::vector<double> black = attributeValues(svg, "bar-collisions", "height");
+  ASSERT_EQ(score.size(), 1U);
+  ASSERT_EQ(black.size(), 1U);
+  EXPECT_NEAR(black[0] / score[0], 5.0 / 3.0, 0.01);  // collisions 5 over a score of -3
+}
+
+TEST(ExperimentSummary, MeanAndSampleStddevPerCell) {
+  std::vector<ExperimentRun> runs(3);
+  const int goals[] = {4, 6, 8};
+  for (int i = 0; i < 3; ++i) {
+    runs[i].map = "office";
+    runs[i].run = i;
+    runs[i].result.goals_reached = goals[i];
+    runs[i].result.collisions = i == 2 ? 1 : 0;
+    runs[i].result.score = runs[i].result.goals_reached - runs[i].result.collisions;
+  }
+  const std::vector<ExperimentCell> cells = summarizeExperiment(runs);
+  ASSERT_EQ(cells.size(), 1U);
+  EXPECT_EQ(cells[0].runs, 3);
+  EXPECT_DOUBLE_EQ(cells[0].goals.mean, 6.0);
+  EXPECT_DOUBLE_EQ(cells[0].goals.stddev, 2.0);
+  EXPECT_NEAR(cells[0].collisions.mean, 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(cells[0].score.mean, 17.0 / 3.0, 1e-12);
+}
+
+TEST(ExperimentMaps, AcceptsAUsersMapFileWithGoalsAndRejectsOneWithout) {
+  const fs::path dir = freshDir("maps");
+  std::ofstream(dir / "depot.yaml") << "format: staa-polygon-map/1\nname: depot\nbounds: [0, 0, 10, 10]\n"
+                                       "obstacles:\n  - [[4, 4], [6, 4], [6, 6], [4, 6]]\n"
+                                       "goals:\n  - [1, 1]\n  - [9, 9]\n";
+  std::ofstream(dir / "nogoals.yaml") << "format: staa-polygon-map/1\nname: empty\nbounds: [0, 0, 10, 10]\n"
+                                         "obstacles: []\n";
+  const ExperimentMap m = loadExperimentMap((dir / "depot.yaml").string(), 1);
+  EXPECT_EQ(m.name, "depot");
+  EXPECT_EQ(m.map.goals.size(), 2U);
+  EXPECT_THROW(loadExperimentMap((dir / "nogoals.yaml").string(), 1), MapError);
+  try {
+    loadExperimentMap("offfice", 1);
+    ADD_FAILURE() << "no error for an unknown map";
+  } catch (const MapError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("offfice"));
+  }
+  fs::remove_all(dir);
+}
+
+// ---- the binary ----
+
+struct Exit {
+  int code = -1;
+  std::string out, err;
+};
+
+Exit runSim(const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string command =
+      std::string(STAA_SIM_EXE) + " " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  Exit e;
+  e.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  e.out = readFile(out);
+  e.err = readFile(err);
+  return e;
+}
+
+TEST(StaaSimExperiment, SmallExperimentExitsZeroWithResultsAndFigure) {
+  const fs::path dir = freshDir("smoke");
+  const Exit e = runSim("experiment --maps clutter --controllers staa,dwa --modes cooperative --agents 1 --runs 1 "
+                        "--duration 3 --budget-expansions 200 --jobs 2 --out '" + (dir / "out").string() + "'",
+                        dir);
+  ASSERT_EQ(e.code, 0) << e.err;
+  const Json doc = Json::parse(readFile(dir / "out" / "results.json"));
+  EXPECT_EQ(doc["runs"].size(), 2U);
+  EXPECT_TRUE(fs::exists(dir / "out" / "scores.svg"));
+  EXPECT_THAT(e.out, HasSubstr("clutter"));
+  EXPECT_THAT(e.out, HasSubstr("score"));
+  EXPECT_THAT(e.err, HasSubstr("[2/2]"));
+  fs::remove_all(dir);
+}
+
+TEST(StaaSimExperiment, BadInputExitsTwoNamingTheOptionAndValue) {
+  const fs::path dir = freshDir("bad");
+  const std::string out = " --out '" + (dir / "out").string() + "'";
+  struct Case {
+    std::string args, option, value;
+  };
+  for (const Case& c : std::vector<Case>{{"--agents 1,0", "--agents", "'0'"},
+                                         {"--controllers staa,mpc", "--controllers", "'mpc'"},
+                                         {"--modes ghosts", "--modes", "'ghosts'"},
+                                         {"--heuristics euclid", "--heuristics", "'euclid'"},
+                                         {"--runs -1", "--runs", "'-1'"},
+                                         {"--jobs 0", "--jobs", "'0'"},
+                                         {"--maps clutter,no-such-map.yaml", "--maps", "no-such-map.yaml"},
+                                         {"--budget-ms 5 --budget-expansions 100", "--budget-ms", "exclude"}}) {
+    const Exit e = runSim("experiment " + c.args + out, dir);
+    EXPECT_EQ(e.code, 2) << c.args << ": " << e.err;
+    EXPECT_THAT(e.err, HasSubstr(c.option)) << c.args;
+    EXPECT_THAT(e.err, HasSubstr(c.value)) << c.args;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out" / "results.json"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace staa
