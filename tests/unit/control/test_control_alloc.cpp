@@ -51,7 +51,10 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
     std::vector<Vec2> velocities(world.moverCount());
     std::size_t allocations = 0;
     int planned = 0;
-    for (int k = 0; k < 1000; ++k) {
+    // 1,000 cycles for STAA* with its own heuristic (the test); 300 for the variants,
+    // which keeps the sanitizer run in CI short.
+    const int cycles = variant.baseline == nullptr && variant.heuristic == HeuristicKind::kPathRtr ? 1000 : 300;
+    for (int k = 0; k < cycles; ++k) {
       for (std::size_t i = 0; i < world.moverCount(); ++i) {
         polys[i] = world.moverPolygon(i);  // the simulator's side: may allocate
         views[i] = polys[i];
@@ -72,7 +75,7 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
       }
     }
     EXPECT_EQ(allocations, 0u) << variant.name;
-    EXPECT_GT(planned, 900) << variant.name;
+    EXPECT_GT(planned, cycles * 9 / 10) << variant.name;
   }
 }
 
