@@ -213,12 +213,7 @@ bool PolygonSet::forEachEdgeNearSegment(const Vec2& a, const Vec2& b, Visitor&& 
     const int x1 = std::min(static_cast<int>(std::floor((xhi + eps - grid_origin_.x()) / cell_)), grid_w_ - 1);
     for (int x = x0; x <= x1; ++x) {
       const std::size_t cell = static_cast<std::size_t>(y) * grid_w_ + x;
-      for (std::uint32_t i = cell_edge_offsets_[cell]; i < cell_edge_offsets_[cell + 1]; ++i) {
-        const std::uint32_t v = cell_edges_[i];
-        if (edge_stamp_[v] == stamp_) continue;
-        edge_stamp_[v] = stamp_;
-        if (visit(static_cast<std::size_t>(v))) return true;
-      }
+      if (visitCellEdges(cell, visit)) return true;
     }
   }
   return false;

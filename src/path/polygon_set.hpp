@@ -98,6 +98,17 @@ class PolygonSet {
   bool forEachEdgeNearSegment(const Vec2& a, const Vec2& b, Visitor&& visit) const;
   template <typename Visitor>
   bool forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const;
+  // The edges listed in one grid cell that this query has not visited yet.
+  template <typename Visitor>
+  bool visitCellEdges(std::size_t cell, Visitor&& visit) const {
+    for (std::uint32_t i = cell_edge_offsets_[cell]; i < cell_edge_offsets_[cell + 1]; ++i) {
+      const std::uint32_t v = cell_edges_[i];
+      if (edge_stamp_[v] == stamp_) continue;
+      edge_stamp_[v] = stamp_;
+      if (visit(static_cast<std::size_t>(v))) return true;
+    }
+    return false;
+  }
 
   void buildGrid(double cell_size);
 
@@ -147,12 +158,7 @@ bool PolygonSet::forEachEdgeInBox(const Box& box, Visitor&& visit) const {
   for (int y = y0; y <= y1; ++y) {
     for (int x = x0; x <= x1; ++x) {
       const std::size_t cell = static_cast<std::size_t>(y) * static_cast<std::size_t>(grid_w_) + static_cast<std::size_t>(x);
-      for (std::uint32_t i = cell_edge_offsets_[cell]; i < cell_edge_offsets_[cell + 1]; ++i) {
-        const std::uint32_t v = cell_edges_[i];
-        if (edge_stamp_[v] == stamp_) continue;
-        edge_stamp_[v] = stamp_;
-        if (visit(static_cast<std::size_t>(v))) return true;
-      }
+      if (visitCellEdges(cell, visit)) return true;
     }
   }
   return false;

@@ -1,3 +1,4 @@
+#include "sim/results_json.hpp"
 #include "sim/experiment.hpp"
 
 #include "map/generate.hpp"
@@ -45,14 +46,6 @@ MeanStd meanStd(const std::vector<double>& v) {
   return m;
 }
 
-Json distributionJson(const Distribution& d, bool with_mean, bool with_max) {
-  Json j;
-  if (with_mean) j["mean"] = d.mean;
-  j["p50"] = d.p50;
-  j["p99"] = d.p99;
-  if (with_max) j["max"] = d.max;
-  return j;
-}
 
 Json meanStdJson(const MeanStd& m) { return Json{{"mean", m.mean}, {"stddev", m.stddev}}; }
 

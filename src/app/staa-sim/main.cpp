@@ -5,6 +5,7 @@
 // Exit status: 0 on a completed run (reached or not), 2 on bad input with one line on stderr
 // naming the option or file and the value, 1 on an unexpected failure during the run.
 
+#include "sim/results_json.hpp"
 #include "control/control_cycle.hpp"
 #include "control/robot_profile.hpp"
 #include "geometry/polygon.hpp"
@@ -45,6 +46,7 @@ namespace fs = std::filesystem;
 using staa::Pose2;
 using staa::Vec2;
 using Json = nlohmann::ordered_json;
+using staa::distributionJson;
 
 constexpr int kExitBadInput = 2;
 constexpr int kExitRunFailed = 1;
@@ -106,14 +108,6 @@ std::string fmt(double v, int decimals = 2) {
 
 std::string fmtPose(const Pose2& p) { return "(" + fmt(p.x) + ", " + fmt(p.y) + ", " + fmt(p.theta) + ")"; }
 
-Json distributionJson(const staa::Distribution& d, bool with_mean, bool with_max) {
-  Json j;
-  if (with_mean) j["mean"] = d.mean;
-  j["p50"] = d.p50;
-  j["p99"] = d.p99;
-  if (with_max) j["max"] = d.max;
-  return j;
-}
 
 // ---- the request ----
 
