@@ -1,0 +1,50 @@
+#pragma once
+// The clock the runtime runs on, injected (ARCHITECTURE.md section 3): the daemon uses the
+// monotonic clock and sleeps on absolute deadlines; tests use a manual clock and step it, so
+// a periodic thread runs thousands of cycles deterministically in lockstep.
+
+#include <atomic>
+#include <cstdint>
+
+namespace staa::rt {
+
+using Nanos = std::int64_t;  // nanoseconds on CLOCK_MONOTONIC (or a test's time line)
+
+constexpr Nanos kNanosPerMilli = 1'000'000;
+constexpr Nanos kNanosPerSecond = 1'000'000'000;
+
+class Clock {
+ public:
+  virtual ~Clock() = default;
+  virtual Nanos now() const = 0;
+  // Blocks until now() >= deadline (absolute). Returns 0, or the error code of the sleep
+  // (clock_nanosleep returns it; it does not set errno). EINTR is retried inside.
+  virtual int sleepUntil(Nanos deadline) = 0;
+};
+
+// CLOCK_MONOTONIC; sleepUntil = clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME).
+class MonotonicClock final : public Clock {
+ public:
+  Nanos now() const override;
+  int sleepUntil(Nanos deadline) override;
+};
+
+// A test's clock: now() is what the test set; sleepUntil(d) jumps time to d when d is later
+// (lockstep: a sleeping thread "wakes" exactly on time), plus an optional injected wake-up
+// delay for the next sleep. Thread-safe (atomics), so a test may read it from another thread.
+class ManualClock final : public Clock {
+ public:
+  explicit ManualClock(Nanos start = 0) : now_(start) {}
+  Nanos now() const override { return now_.load(std::memory_order_acquire); }
+  int sleepUntil(Nanos deadline) override;
+  void set(Nanos t) { now_.store(t, std::memory_order_release); }
+  void advance(Nanos d) { now_.fetch_add(d, std::memory_order_acq_rel); }
+  // The next sleepUntil wakes this much after its deadline (a late wake-up), then resets.
+  void delayNextWake(Nanos d) { next_delay_.store(d, std::memory_order_release); }
+
+ private:
+  std::atomic<Nanos> now_;
+  std::atomic<Nanos> next_delay_{0};
+};
+
+}  // namespace staa::rt

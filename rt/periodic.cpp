@@ -1,0 +1,69 @@
+#include "rt/periodic.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace staa::rt {
+
+PeriodicLoop::PeriodicLoop(Clock& clock, Nanos period, Nanos start, std::uint32_t histogram_bound_us)
+    : clock_(clock),
+      period_(period),
+      start_(start),
+      deadline_(start),
+      wake_(histogram_bound_us),
+      exec_(histogram_bound_us) {
+  if (period <= 0) {
+    throw std::invalid_argument("PeriodicLoop: period must be > 0 ns, got " + std::to_string(period) + " ns");
+  }
+}
+
+Wake PeriodicLoop::wait() {
+  Wake w;
+  w.deadline = deadline_;
+  w.index = index_;
+  w.error = clock_.sleepUntil(deadline_);
+  w.woke = clock_.now();
+  w.latency = w.woke - w.deadline;
+  if (w.error != 0) {
+    // The sleep failed (a bad deadline or clock): no latency to speak of, the cycle still
+    // runs so the caller keeps its schedule and sees the error in the counters.
+    ++counters_.sleep_errors;
+  } else {
+    wake_.record(w.latency);
+  }
+  last_wake_ = w;
+  return w;
+}
+
+std::uint64_t PeriodicLoop::finish() {
+  const Nanos now = clock_.now();
+  last_exec_ = now - last_wake_.woke;
+  exec_.record(last_exec_);
+  ++counters_.cycles;
+
+  // Deadlines are computed from the start, never accumulated, so they stay exactly
+  // start + k * period however many cycles run.
+  std::uint64_t next = index_ + 1;
+  Nanos next_deadline = start_ + static_cast<Nanos>(next) * period_;
+  std::uint64_t skipped = 0;
+  if (now > next_deadline) {
+    // The cycle ended past the next deadline: skip to the first deadline strictly in the
+    // future instead of running a burst of late cycles to catch up.
+    ++counters_.overruns;
+    if (last_exec_ > period_) {
+      ++counters_.execution_overruns;
+    } else {
+      ++counters_.late_wakeups;
+    }
+    const auto first_future = static_cast<std::uint64_t>((now - start_) / period_) + 1;
+    skipped = first_future - next;
+    counters_.skipped_periods += skipped;
+    next = first_future;
+    next_deadline = start_ + static_cast<Nanos>(next) * period_;
+  }
+  index_ = next;
+  deadline_ = next_deadline;
+  return skipped;
+}
+
+}  // namespace staa::rt

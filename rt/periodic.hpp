@@ -1,0 +1,71 @@
+#pragma once
+// A periodic schedule on absolute deadlines (ARCHITECTURE.md section 3): deadline k is
+// start + k * period. After a cycle's body the next deadline is the first one still in the
+// future: when the body ran past one or more deadlines, an overrun is counted and the missed
+// periods are skipped (no burst of catch-up cycles). Every missed deadline is attributed:
+//   - execution overrun (ours): the body itself took longer than the period;
+//   - late wake-up (the platform's): the body fit in a period, but woke so late that it ended
+//     past the next deadline.
+// No allocation; not thread-safe (one thread owns a loop).
+
+#include "rt/clock.hpp"
+#include "rt/timing_stats.hpp"
+
+#include <cstdint>
+
+namespace staa::rt {
+
+struct PeriodicCounters {
+  std::uint64_t cycles = 0;
+  std::uint64_t overruns = 0;             // cycles that ended after the next deadline
+  std::uint64_t execution_overruns = 0;   // ... of them, because the body took > period
+  std::uint64_t late_wakeups = 0;         // ... of them, because the wake-up was late
+  std::uint64_t skipped_periods = 0;      // deadlines dropped in all
+  std::uint64_t sleep_errors = 0;         // sleepUntil returned non-zero
+};
+
+// What one wait returned.
+struct Wake {
+  Nanos deadline = 0;       // the deadline slept to
+  Nanos woke = 0;           // clock time after waking
+  Nanos latency = 0;        // woke - deadline (>= 0 on a correct clock)
+  std::uint64_t index = 0;  // k of the deadline
+  int error = 0;            // sleepUntil's error, 0 normally
+};
+
+class PeriodicLoop {
+ public:
+  // Deadline 0 is `start` (usually clock.now() + period). period > 0, else
+  // std::invalid_argument. Statistics: histograms of wake-up latency and execution time,
+  // 1 us bins up to `histogram_bound_us` (allocated here, never after).
+  PeriodicLoop(Clock& clock, Nanos period, Nanos start, std::uint32_t histogram_bound_us = 100'000);
+
+  // Sleeps until the current deadline and returns what happened.
+  Wake wait();
+  // Ends the cycle started by the last wait(): records the execution time (now - woke),
+  // attributes and counts an overrun, and moves the deadline to the next one in the future
+  // (skipping missed ones). Returns the number of periods skipped (0 normally).
+  std::uint64_t finish();
+
+  Nanos period() const { return period_; }
+  Nanos nextDeadline() const { return deadline_; }
+  const PeriodicCounters& counters() const { return counters_; }
+  const LatencyHistogram& wakeLatency() const { return wake_; }
+  const LatencyHistogram& execution() const { return exec_; }
+  // The last cycle's execution time.
+  Nanos lastExecution() const { return last_exec_; }
+
+ private:
+  Clock& clock_;
+  Nanos period_;
+  Nanos start_;
+  Nanos deadline_;
+  std::uint64_t index_ = 0;
+  Wake last_wake_;
+  Nanos last_exec_ = 0;
+  PeriodicCounters counters_;
+  LatencyHistogram wake_;
+  LatencyHistogram exec_;
+};
+
+}  // namespace staa::rt
