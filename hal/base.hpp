@@ -1,0 +1,67 @@
+#pragma once
+// The robot base as the control code sees it (ARCHITECTURE.md section 4), shaped like
+// ros2_control's hardware interface: the base I/O thread calls read(now) to take in what the
+// hardware sent (odometry, velocities, status, faults) and write(now, command) to send the
+// latest velocity command. An implementation is used by that one thread only; the daemon
+// passes odometry and commands to the other threads through triple buffers.
+//
+// Implementations: hal/sim (the simulator's world), hal/mock (scripted, for tests); the
+// SocketCAN driver comes later as a base driver over a transport opened by file descriptor.
+// read() and write() never allocate, lock or block beyond a non-blocking poll of their
+// transport.
+
+#include "geometry/types.hpp"
+#include "rt/clock.hpp"
+
+#include <cstdint>
+
+namespace staa::hal {
+
+enum class BaseFault : std::uint8_t {
+  kNone,
+  kEmergencyStop,   // the base's emergency stop is pressed
+  kHeartbeatLost,   // the base stopped sending heartbeats
+  kBusOff,          // the bus is gone (CAN bus-off, transport closed)
+  kWriteFailed,     // the command could not be sent
+  kDriverFault,     // the base reports a drive fault (fault_code says which)
+};
+const char* toString(BaseFault fault);
+
+// Odometry: the base's pose estimate in the map frame (the sim's ground truth, or odometry
+// corrected by localization) and the measured velocities.
+struct Odometry {
+  rt::Nanos stamp = -1;  // when it was measured; < 0: never
+  Pose2 pose;
+  double v = 0.0;  // m/s
+  double w = 0.0;  // rad/s
+};
+
+struct BaseStatus {
+  rt::Nanos stamp = -1;
+  bool enabled = false;
+  BaseFault fault = BaseFault::kNone;
+  std::uint32_t fault_code = 0;  // the base's own code, 0 when none
+};
+
+struct VelocityCommand {
+  rt::Nanos stamp = -1;  // when the control thread produced it
+  double v = 0.0;
+  double w = 0.0;
+  bool brake = false;    // a stop command: v = w = 0 with the base's full deceleration
+};
+
+class Base {
+ public:
+  virtual ~Base() = default;
+  // Takes in what the base sent since the last call.
+  virtual void read(rt::Nanos now) = 0;
+  // Sends `command` (the latest one; the same one again when nothing new came).
+  virtual void write(rt::Nanos now, const VelocityCommand& command) = 0;
+  virtual Odometry odometry() const = 0;
+  virtual BaseStatus status() const = 0;
+  // Sets the pose estimate (staactl pose): the sim moves its robot there only when it is
+  // free; a real base re-anchors its odometry. Returns false with no change when refused.
+  virtual bool setPose(const Pose2& pose) = 0;
+};
+
+}  // namespace staa::hal

@@ -1,0 +1,426 @@
+// staactl: the command-line client of staad's control socket (ARCHITECTURE.md section 6).
+//
+//   staactl [--socket PATH] goal X Y [TH] | stop | pose X Y [TH] | status [--json]
+//                           | wait [--timeout S] [--state STATE]
+//
+// The socket is --socket, else $STAAD_SOCKET, else /run/staad/staad.sock. One request line
+// out, one reply line back (protocol.hpp), with a 2 s limit on the whole exchange: a daemon
+// that hangs makes staactl fail, never hang. Exit status: 0 ok (wait: the state was reached),
+// 1 staad refused or could not be reached (wait: the goal became unreachable), 2 bad
+// arguments, 3 wait timed out. Errors are one line on stderr naming the value.
+
+#include "app/cli_support.hpp"
+#include "app/staad/protocol.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <thread>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+namespace {
+
+using Json = nlohmann::ordered_json;  // keeps the daemon's key order for --json
+using SteadyClock = std::chrono::steady_clock;
+using staa::cli::InputError;
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailed = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitTimeout = 3;
+
+constexpr const char* kDefaultSocket = "/run/staad/staad.sock";
+constexpr auto kReplyTimeout = std::chrono::seconds(2);
+constexpr std::size_t kMaxReplyBytes = 1u << 20;  // far above any status; guards against a runaway peer
+constexpr auto kWaitPoll = std::chrono::milliseconds(100);
+constexpr auto kWaitProgress = std::chrono::seconds(1);
+
+// staad could not be asked, or refused: what() is the line after "staactl: " (exit 1).
+class Failure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+std::string errnoText(int error) { return std::system_category().message(error); }
+
+std::string inQuotes(std::string_view s) {
+  std::string q = "'";  // appended: GCC 12 warns falsely (-Wrestrict) on "'" + s + "'"
+  q.append(s).append("'");
+  return q;
+}
+
+// ---- transport: one connection, one request line, one reply line, within a deadline ----
+
+class Connection {
+ public:
+  Connection(const std::string& path, SteadyClock::time_point deadline) : path_(path), deadline_(deadline) {
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::memcpy(addr.sun_path, path.data(), path.size());  // length checked by the caller
+    // Non-blocking from the start: a daemon whose accept backlog is full, or that never
+    // answers, costs at most the deadline.
+    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd_ < 0) throw Failure("socket(AF_UNIX): " + errnoText(errno));
+    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
+      const int error = errno;
+      if (error == EINPROGRESS) {
+        waitFor(POLLOUT, "connecting");
+        int so_error = 0;
+        socklen_t len = sizeof so_error;
+        if (::getsockopt(fd_, SOL_SOCKET, SO_ERROR, &so_error, &len) != 0) so_error = errno;
+        if (so_error != 0) cannotConnect(so_error);
+      } else {
+        cannotConnect(error);
+      }
+    }
+  }
+  ~Connection() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+
+  void send(const std::string& line) {
+    std::size_t sent = 0;
+    while (sent < line.size()) {
+      // MSG_NOSIGNAL: a daemon that closed on us is an error message, not a SIGPIPE death.
+      const ssize_t n = ::send(fd_, line.data() + sent, line.size() - sent, MSG_NOSIGNAL);
+      if (n > 0) {
+        sent += static_cast<std::size_t>(n);
+      } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+        waitFor(POLLOUT, "sending the request");
+      } else if (n < 0 && errno == EINTR) {
+        continue;
+      } else {
+        throw Failure("cannot send to " + path_ + ": " + errnoText(errno));
+      }
+    }
+  }
+
+  std::string receiveLine() {
+    std::string reply;
+    char buf[4096];
+    for (;;) {
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n > 0) {
+        reply.append(buf, static_cast<std::size_t>(n));
+        if (const auto nl = reply.find('\n'); nl != std::string::npos) return reply.substr(0, nl);
+        if (reply.size() > kMaxReplyBytes) throw Failure("reply from " + path_ + " is longer than 1 MiB without a line end");
+      } else if (n == 0) {
+        throw Failure("staad at " + path_ + " closed the connection without a reply" +
+                      (reply.empty() ? std::string() : " (after " + std::to_string(reply.size()) + " bytes of a line)"));
+      } else if (errno == EAGAIN || errno == EWOULDBLOCK) {
+        waitFor(POLLIN, "waiting for the reply");
+      } else if (errno != EINTR) {
+        throw Failure("cannot read from " + path_ + ": " + errnoText(errno));
+      }
+    }
+  }
+
+ private:
+  [[noreturn]] void cannotConnect(int error) const {
+    std::string msg = "cannot connect to " + path_ + ": " + errnoText(error);
+    if (error == EAGAIN) msg += " (staad's connection queue is full)";
+    msg += " (is staad running? --socket or STAAD_SOCKET)";
+    throw Failure(msg);
+  }
+
+  void waitFor(short events, const char* doing) const {
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline_ - SteadyClock::now());
+      if (left.count() <= 0) {
+        throw Failure("no reply from staad at " + path_ + " within " + std::to_string(kReplyTimeout.count()) + " s (" + doing + ")");
+      }
+      pollfd p{fd_, events, 0};
+      const int r = ::poll(&p, 1, static_cast<int>(left.count()) + 1);
+      if (r > 0) return;  // ready, or an error/hang-up the next call reports with its errno
+      if (r < 0 && errno != EINTR) throw Failure(std::string("poll: ") + errnoText(errno));
+    }
+  }
+
+  std::string path_;
+  SteadyClock::time_point deadline_;
+  int fd_ = -1;
+};
+
+// Sends one request and returns the reply object; a reply with "ok": false becomes a Failure
+// carrying staad's own error text.
+Json ask(const std::string& socket_path, const staa::staad::Request& request) {
+  Connection c(socket_path, SteadyClock::now() + kReplyTimeout);
+  c.send(staa::staad::requestLine(request));
+  const std::string line = c.receiveLine();
+  Json reply;
+  try {
+    reply = Json::parse(line);
+  } catch (const Json::parse_error&) {
+    throw Failure("staad at " + socket_path + " replied with something that is not JSON: " +
+                  inQuotes(line.size() > 80 ? line.substr(0, 77) + "..." : line));
+  }
+  if (!reply.is_object() || !reply.contains("ok") || !reply["ok"].is_boolean()) {
+    throw Failure("staad at " + socket_path + " replied without an \"ok\" field: " + inQuotes(line.substr(0, 80)));
+  }
+  if (!reply["ok"].get<bool>()) {
+    const auto it = reply.find("error");
+    throw Failure("staad: " + (it != reply.end() && it->is_string() ? it->get<std::string>() : std::string("request refused (no reason given)")));
+  }
+  return reply;
+}
+
+Json fetchStatus(const std::string& socket_path) {
+  staa::staad::Request request;
+  request.kind = staa::staad::RequestKind::kStatus;
+  Json reply = ask(socket_path, request);
+  if (!reply.contains("status") || !reply["status"].is_object()) {
+    throw Failure("staad at " + socket_path + " replied to status without a \"status\" object");
+  }
+  return reply["status"];
+}
+
+// ---- reading the status leniently: a field missing or of another type prints as "?" ----
+
+std::string num(const Json& j, const char* key, int decimals) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_number()) return "?";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, it->get<double>());
+  return buf;
+}
+
+std::string numAt(const Json& j, const char* key, std::size_t i, int decimals) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_array() || it->size() <= i || !(*it)[i].is_number()) return "?";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, (*it)[i].get<double>());
+  return buf;
+}
+
+std::string text(const Json& j, const char* key, const char* if_null = "?") {
+  const auto it = j.find(key);
+  if (it == j.end()) return "?";
+  if (it->is_null()) return if_null;
+  if (it->is_string()) return it->get<std::string>();
+  return it->dump();
+}
+
+const Json& sub(const Json& j, const char* key) {
+  static const Json kEmpty = Json::object();
+  const auto it = j.find(key);
+  return it != j.end() && it->is_object() ? *it : kEmpty;
+}
+
+std::string age(const Json& j, const char* key) {
+  const auto it = j.find(key);
+  if (it != j.end() && it->is_null()) return "never";
+  const std::string s = num(j, key, 3);
+  return s == "?" ? s : s + " s";
+}
+
+void printSummary(const Json& s) {
+  std::ostringstream out;
+  out << "state           " << text(s, "state") << "\n";
+  out << "pose            x " << numAt(s, "pose", 0, 3) << " m, y " << numAt(s, "pose", 1, 3) << " m, theta "
+      << numAt(s, "pose", 2, 3) << " rad\n";
+  out << "velocity        v " << numAt(s, "velocity", 0, 3) << " m/s, w " << numAt(s, "velocity", 1, 3) << " rad/s\n";
+  if (const auto g = s.find("goal"); g != s.end() && g->is_array()) {
+    out << "goal            x " << numAt(s, "goal", 0, 3) << " m, y " << numAt(s, "goal", 1, 3) << " m, theta "
+        << numAt(s, "goal", 2, 3) << " rad\n";
+  } else {
+    out << "goal            " << text(s, "goal", "none") << "\n";
+  }
+  out << "fault           " << text(s, "fault", "none") << "\n";
+  const Json& cycle = sub(s, "cycle");
+  out << "cycle           p50 " << num(cycle, "p50_us", 0) << " us, p99 " << num(cycle, "p99_us", 0) << " us, max "
+      << num(cycle, "max_us", 0) << " us, " << num(cycle, "overruns", 0) << " overruns in " << num(cycle, "count", 0)
+      << " cycles\n";
+  const Json& staleness = sub(s, "staleness");
+  out << "staleness       odometry " << age(staleness, "odometry_s") << ", obstacles " << age(staleness, "obstacles_s") << "\n";
+  out << "rt_allocations  " << num(s, "rt_allocations", 0) << "\n";
+  std::cout << out.str() << std::flush;
+}
+
+// ---- command-line values ----
+
+double coordinate(const std::string& command, const char* name, const std::string& value, const char* unit) {
+  const auto v = staa::cli::parseDouble(value);
+  if (!v) throw InputError(command + ": " + name + ": expected a finite number (" + unit + "), got " + inQuotes(value));
+  return *v;
+}
+
+staa::Pose2 poseArgs(const std::string& command, const std::string& x, const std::string& y, const std::string& theta) {
+  return {coordinate(command, "X", x, "metres"), coordinate(command, "Y", y, "metres"),
+          theta.empty() ? 0.0 : coordinate(command, "TH", theta, "radians")};
+}
+
+std::string socketPath(const std::string& option) {
+  std::string path = option;
+  std::string from = "--socket";
+  if (path.empty()) {
+    if (const char* env = std::getenv("STAAD_SOCKET"); env != nullptr && *env != '\0') {
+      path = env;
+      from = "STAAD_SOCKET";
+    } else {
+      path = kDefaultSocket;
+    }
+  }
+  if (path.size() >= sizeof(sockaddr_un{}.sun_path)) {
+    throw InputError(from + ": a Unix socket path is at most " + std::to_string(sizeof(sockaddr_un{}.sun_path) - 1) +
+                     " bytes, got " + std::to_string(path.size()) + ": " + path);
+  }
+  return path;
+}
+
+constexpr const char* kStates[] = {"idle", "driving", "reached", "unreachable", "stopped", "fault"};
+
+// Polls the status until the wanted state (exit 0), unreachable (exit 1) or the timeout (3).
+int waitFor(const std::string& socket_path, const std::string& wanted, double timeout_s) {
+  const auto start = SteadyClock::now();
+  const auto deadline = start + std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(timeout_s));
+  auto next_progress = start + kWaitProgress;
+  std::string state;
+  for (;;) {
+    const Json status = fetchStatus(socket_path);
+    state = text(status, "state");
+    if (state == wanted) {
+      std::cout << state << "\n";
+      return kExitOk;
+    }
+    // Unreachable is final for this goal: waiting longer cannot bring the robot there.
+    if (state == "unreachable") {
+      std::cerr << "staactl: wait: the goal is unreachable (waiting for " << wanted << ")\n";
+      return kExitFailed;
+    }
+    const auto now = SteadyClock::now();
+    if (now >= deadline) break;
+    if (now >= next_progress) {
+      const double elapsed = std::chrono::duration<double>(now - start).count();
+      std::cerr << "staactl: waiting for " << wanted << ": " << state << " at (" << numAt(status, "pose", 0, 2) << ", "
+                << numAt(status, "pose", 1, 2) << "), fault " << text(status, "fault", "none") << ", "
+                << static_cast<long>(elapsed) << " s\n";
+      next_progress += kWaitProgress;
+    }
+    std::this_thread::sleep_until(std::min(now + kWaitPoll, deadline));
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", timeout_s);
+  std::cerr << "staactl: wait: timed out after " << buf << " s waiting for " << wanted << " (state " << state << ")\n";
+  return kExitTimeout;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"staactl: send goals and queries to staad's control socket"};
+  app.require_subcommand(1);
+  app.fallthrough();  // --socket may also follow the subcommand
+  std::string socket_option;
+  app.add_option("--socket", socket_option, "staad's control socket (default: $STAAD_SOCKET, else /run/staad/staad.sock)");
+
+  std::string x, y, theta;
+  auto poseCommand = [&](const char* name, const char* what) {
+    CLI::App* sub = app.add_subcommand(name, what);
+    sub->add_option("X", x, "x, metres")->required();
+    sub->add_option("Y", y, "y, metres")->required();
+    sub->add_option("TH", theta, "heading, radians (default 0)");
+    return sub;
+  };
+  CLI::App* goal = poseCommand("goal", "drive to the pose X Y [TH]");
+  CLI::App* pose = poseCommand("pose", "set (correct) the robot's pose estimate to X Y [TH]");
+  CLI::App* stop = app.add_subcommand("stop", "brake and drop the goal");
+  CLI::App* status = app.add_subcommand("status", "print the daemon's state, pose, timing and faults");
+  bool json = false;
+  status->add_flag("--json", json, "print the status object as JSON");
+  CLI::App* wait = app.add_subcommand("wait", "wait until the goal is reached (exit 0), unreachable (1) or the timeout (3)");
+  std::string timeout_text = "120";
+  std::string wanted = "reached";
+  wait->add_option("--timeout", timeout_text, "seconds (default 120)");
+  wait->add_option("--state", wanted, "the state to wait for (default reached)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::string where;
+    for (const CLI::App* sub : app.get_subcommands()) where += sub->get_name() + ": ";
+    if (where.empty()) {
+      // CLI11 only says "A subcommand is required" for a misspelt command: name it.
+      for (int i = 1; i < argc; ++i) {
+        const std::string_view arg = argv[i];
+        if (arg == "--socket") {
+          ++i;
+        } else if (!arg.empty() && arg.front() != '-') {
+          std::cerr << "staactl: unknown command " << inQuotes(arg) << " (expected goal, pose, stop, status or wait; try --help)\n";
+          return kExitBadInput;
+        }
+      }
+    }
+    std::cerr << "staactl: " << where << e.what() << " (try --help)\n";
+    return kExitBadInput;
+  }
+
+  // Every argument is checked before the socket is touched.
+  const std::string socket_path = socketPath(socket_option);
+  staa::staad::Request request;
+  if (goal->parsed() || pose->parsed()) {
+    const std::string name = goal->parsed() ? "goal" : "pose";
+    request.kind = goal->parsed() ? staa::staad::RequestKind::kGoal : staa::staad::RequestKind::kPose;
+    request.pose = poseArgs(name, x, y, theta);
+  } else if (stop->parsed()) {
+    request.kind = staa::staad::RequestKind::kStop;
+  } else if (status->parsed()) {
+    const Json s = fetchStatus(socket_path);
+    if (json) {
+      std::cout << s.dump(2, ' ', false, Json::error_handler_t::replace) << std::endl;
+    } else {
+      printSummary(s);
+    }
+    return kExitOk;
+  } else if (wait->parsed()) {
+    const auto timeout = staa::cli::parseDouble(timeout_text);
+    if (!timeout || *timeout <= 0.0) {
+      throw InputError("wait: --timeout: expected seconds (a finite number > 0), got " + inQuotes(timeout_text));
+    }
+    if (std::find(std::begin(kStates), std::end(kStates), wanted) == std::end(kStates)) {
+      throw InputError("wait: --state: expected idle, driving, reached, unreachable, stopped or fault, got " + inQuotes(wanted));
+    }
+    return waitFor(socket_path, wanted, *timeout);
+  }
+  ask(socket_path, request);
+  std::cout << "ok\n";
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const InputError& e) {
+    std::cerr << "staactl: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const Failure& e) {
+    std::cerr << "staactl: " << e.what() << "\n";
+    return kExitFailed;
+  } catch (const std::exception& e) {  // never a crash: anything else is a failure with its reason
+    std::cerr << "staactl: " << e.what() << "\n";
+    return kExitFailed;
+  }
+}

@@ -1,0 +1,489 @@
+#include "app/staad/config.hpp"
+
+#include "map/yaml_support.hpp"
+
+#include "geometry/convex.hpp"
+#include "geometry/polygon.hpp"
+#include "hal/obstacles.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <string_view>
+#include <vector>
+
+namespace staa::staad {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::string_view kFormat = "staad-config/1";
+
+// Ranges that are part of the documented format (config/staad.yaml says the same).
+constexpr double kMaxRateHz = 1000.0;
+constexpr long long kMaxPriority = 99;    // SCHED_FIFO's range on Linux is 1..99
+constexpr long long kMaxCpu = 1023;       // CPU_SETSIZE - 1
+constexpr long long kMinTelemetryRecords = 16;
+constexpr long long kMaxTelemetryRecords = 1 << 20;
+constexpr long long kMaxHeapPrefaultMb = 4096;
+// The prefault touches the calling (main) thread's stack: it must stay well inside the
+// default 8 MiB stack limit, or the prefault itself overflows the stack.
+constexpr long long kMaxStackPrefaultKb = 4096;
+// sockaddr_un::sun_path holds 108 bytes including the terminating NUL.
+constexpr std::size_t kMaxSocketPathBytes = 107;
+
+using yaml_support::describe;
+using yaml_support::readNumber;
+std::string number(double v) { return yaml_support::formatNumber(v); }
+
+std::string joined(std::initializer_list<std::string_view> keys) {
+  std::string out;
+  for (std::string_view k : keys) {
+    if (!out.empty()) out += ", ";
+    out += k;
+  }
+  return out;
+}
+
+// Reads one config file: every message is "FILE:LINE: key.path: what is wrong, got VALUE".
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& key, const std::string& what) const {
+    std::string msg = source_;
+    if (at.IsDefined() && at.Mark().line >= 0) msg += ":" + std::to_string(at.Mark().line + 1);
+    msg += ": ";
+    if (!key.empty()) msg += key + ": ";
+    msg += what;
+    throw ConfigError(msg);
+  }
+
+  // Rejects keys not in `keys` (a typo must never be silently ignored) and keys given twice
+  // (yaml-cpp keeps both, and which one wins would be an accident).
+  void onlyKeys(const YAML::Node& map, const std::string& where, std::initializer_list<std::string_view> keys) const {
+    std::vector<std::pair<std::string, int>> seen;
+    for (const auto& kv : map) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
+      const std::string path = where.empty() ? key : where + "." + key;
+      if (!kv.first.IsScalar() || std::find(keys.begin(), keys.end(), key) == keys.end()) {
+        fail(kv.first, kv.first.IsScalar() ? path : (where.empty() ? std::string("(top level)") : where),
+             "unknown key " + describe(kv.first) + " (expected " + joined(keys) + ")");
+      }
+      for (const auto& [k, line] : seen) {
+        if (k == key) fail(kv.first, path, "given twice (first on line " + std::to_string(line) + ")");
+      }
+      seen.emplace_back(key, kv.first.Mark().line + 1);
+    }
+  }
+
+  static bool present(const YAML::Node& node) { return node.IsDefined() && !node.IsNull(); }
+
+  // The key node of `key` in `map` (its line is where a person looks for the whole section;
+  // a block mapping's own mark is its first entry's line).
+  static YAML::Node keyOf(const YAML::Node& map, const char* key) {
+    for (const auto& kv : map) {
+      if (kv.first.IsScalar() && kv.first.Scalar() == key) return kv.first;
+    }
+    return map;
+  }
+
+  // An optional section: absent (undefined node) or a mapping of known keys.
+  YAML::Node section(const YAML::Node& parent, const char* key, const std::string& where,
+                     std::initializer_list<std::string_view> keys) const {
+    const YAML::Node node = parent[key];
+    if (!node.IsDefined()) return node;
+    if (!node.IsMap()) fail(node, where, "expected a mapping {" + joined(keys) + "}, got " + describe(node));
+    onlyKeys(node, where, keys);
+    return node;
+  }
+
+  YAML::Node required(const YAML::Node& parent, const char* key, const std::string& where, const std::string& what) const {
+    const YAML::Node node = parent[key];
+    if (!present(node)) fail(parent, where, "missing (" + what + ")");
+    return node;
+  }
+
+  double finite(const YAML::Node& node, const std::string& where) const {
+    const auto v = readNumber(node);
+    if (!v) fail(node, where, "expected a number, got " + describe(node));
+    if (!std::isfinite(*v)) fail(node, where, "must be finite, got " + node.Scalar());
+    return *v;
+  }
+
+  // A finite number above `lo`; `rule` says so in the message ("must be > 0 m").
+  double above(const YAML::Node& node, const std::string& where, double lo, const std::string& rule) const {
+    const double v = finite(node, where);
+    if (!(v > lo)) fail(node, where, rule + ", got " + node.Scalar());
+    return v;
+  }
+
+  long long integer(const YAML::Node& node, const std::string& where, long long lo, long long hi,
+                    const std::string& meaning = "") const {
+    std::optional<long long> v;
+    if (node.IsScalar()) {
+      std::string_view s = node.Scalar();
+      if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+      long long x = 0;
+      const auto res = std::from_chars(s.data(), s.data() + s.size(), x);
+      if (!s.empty() && res.ec == std::errc{} && res.ptr == s.data() + s.size()) v = x;
+    }
+    if (!v || *v < lo || *v > hi) {
+      fail(node, where, "must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + meaning + ", got " +
+                            (node.IsScalar() ? node.Scalar() : describe(node)));
+    }
+    return *v;
+  }
+
+  std::string string(const YAML::Node& node, const std::string& where, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, where, "expected " + what + ", got " + describe(node));
+    return node.Scalar();
+  }
+
+  // A file path; relative paths are relative to the config file's directory, so a config
+  // works from whatever directory staad is started in (systemd starts it in /).
+  fs::path path(const YAML::Node& node, const std::string& where, const fs::path& base) const {
+    const std::string text = string(node, where, "a file path");
+    if (text.empty()) fail(node, where, "expected a file path, got an empty string");
+    const fs::path p(text);
+    return (p.is_absolute() ? p : base / p).lexically_normal();
+  }
+
+  // An existing regular file, named with where it was looked for when it is not there.
+  void existingFile(const YAML::Node& node, const std::string& where, const fs::path& file) const {
+    std::error_code ec;
+    const auto status = fs::status(file, ec);
+    std::string as_written = node.Scalar();
+    std::string resolved;
+    if (!fs::path(as_written).is_absolute()) resolved = " (" + as_written + " relative to the config's directory)";
+    if (!fs::exists(status)) fail(node, where, "file not found: " + file.string() + resolved);
+    if (fs::is_directory(status)) fail(node, where, "is a directory, not a file: " + file.string());
+  }
+
+  std::array<double, 3> triple(const YAML::Node& node, const std::string& where) const {
+    if (!node.IsSequence() || node.size() != 3) fail(node, where, "expected [x, y, theta] (metres, radians), got " + describe(node));
+    std::array<double, 3> out{};
+    for (std::size_t k = 0; k < 3; ++k) out[k] = finite(node[k], where + "[" + std::to_string(k) + "]");
+    return out;
+  }
+
+ private:
+  std::string source_;
+};
+
+void readRobotAndMap(const Reader& r, const YAML::Node& root, const fs::path& base, DaemonConfig& config) {
+  const YAML::Node robot = r.required(root, "robot", "robot", "the robot profile file, staa-robot/1");
+  config.robot_file = r.path(robot, "robot", base);
+  r.existingFile(robot, "robot", config.robot_file);
+  try {
+    config.robot = loadRobotProfile(config.robot_file);
+  } catch (const std::exception& e) {  // ProfileError, or an I/O error from the library
+    r.fail(robot, "robot", e.what());
+  }
+
+  const YAML::Node map = r.required(root, "map", "map", "the polygon map file, staa-polygon-map/1");
+  config.map_file = r.path(map, "map", base);
+  r.existingFile(map, "map", config.map_file);
+  try {
+    config.map = loadPolygonMap(config.map_file);
+  } catch (const std::exception& e) {  // MapError
+    r.fail(map, "map", e.what());
+  }
+}
+
+void readRates(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node rates = r.section(root, "rates", "rates", {"control_hz", "base_hz", "perception_hz"});
+  if (!rates.IsDefined()) return;
+  auto rate = [&](const char* key, double& out) {
+    const YAML::Node node = rates[key];
+    if (!node.IsDefined()) return;
+    const std::string where = std::string("rates.") + key;
+    out = r.finite(node, where);
+    if (!(out > 0.0 && out <= kMaxRateHz)) r.fail(node, where, "must be in (0, 1000] Hz, got " + node.Scalar());
+  };
+  rate("control_hz", config.control_hz);
+  rate("base_hz", config.base_hz);
+  rate("perception_hz", config.perception_hz);
+}
+
+void readBudget(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const double period_ms = 1000.0 / config.control_hz;
+  const std::string period = number(period_ms) + " ms at control_hz " + number(config.control_hz);
+  const YAML::Node budget = r.section(root, "budget", "budget", {"ms", "expansions"});
+  if (!budget.IsDefined()) {
+    // The built-in 19 ms fits 30 Hz; at a faster rate it would overrun every cycle.
+    if (!(config.budget_ms < period_ms)) {
+      r.fail(root, "budget", "missing, and the default " + number(config.budget_ms) + " ms does not fit the control period (" +
+                                 period + "): give budget.ms or budget.expansions");
+    }
+    return;
+  }
+  const YAML::Node ms = budget["ms"];
+  const YAML::Node expansions = budget["expansions"];
+  if (ms.IsDefined() && expansions.IsDefined()) {
+    r.fail(Reader::keyOf(root, "budget"), "budget", "give either ms (wall clock) or expansions (reproducible), not both; got ms " + ms.Scalar() +
+                                 " and expansions " + expansions.Scalar());
+  }
+  if (!ms.IsDefined() && !expansions.IsDefined()) {
+    r.fail(Reader::keyOf(root, "budget"), "budget", "expected ms (wall clock) or expansions (reproducible), got neither");
+  }
+  if (ms.IsDefined()) {
+    config.budget_ms = r.finite(ms, "budget.ms");
+    // The planner's budget is part of the cycle: it must leave the rest of the cycle time.
+    if (!(config.budget_ms > 0.0 && config.budget_ms < period_ms)) {
+      r.fail(ms, "budget.ms", "must be > 0 and shorter than the control period (" + period + "), got " + ms.Scalar());
+    }
+    config.budget_expansions.reset();
+  } else {
+    config.budget_expansions =
+        static_cast<std::uint32_t>(r.integer(expansions, "budget.expansions", 1, std::numeric_limits<std::uint32_t>::max()));
+  }
+}
+
+void readSim(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node sim = r.section(root, "sim", "sim", {"start", "movers", "mover_speed", "mover_radius", "seed", "sensor_range_m"});
+  // The simulated obstacles arrive at the perception rate, like a depth camera's frames.
+  config.sim.obstacle_rate_hz = config.perception_hz;
+  if (config.hal != "sim") return;  // a real base ignores the section (it is still checked for typos)
+  if (!sim.IsDefined()) r.fail(Reader::keyOf(root, "hal"), "sim", "missing (hal: sim needs at least sim.start: [x, y, theta], free in the map)");
+
+  const YAML::Node start = r.required(sim, "start", "sim.start", "the simulated robot's start pose [x, y, theta], free in the map");
+  const auto s = r.triple(start, "sim.start");
+  config.sim.start = Pose2{s[0], s[1], s[2]};
+  // The simulated robot must not begin in collision: its whole footprint is checked, as the
+  // simulator would otherwise refuse to start (or start stuck) with a vaguer message.
+  Polygon body;
+  for (const Vec2& p : config.robot.footprint) body.push_back(config.sim.start.transform(p));
+  const std::string at = "[" + number(s[0]) + ", " + number(s[1]) + ", " + number(s[2]) + "]";
+  if (const auto& bounds = config.map.bounds) {
+    for (const Vec2& p : body) {
+      if (!(p.x() > bounds->min.x() && p.x() < bounds->max.x() && p.y() > bounds->min.y() && p.y() < bounds->max.y())) {
+        r.fail(start, "sim.start", "the robot's footprint reaches outside the map's bounds, got " + at);
+      }
+    }
+  }
+  const Box body_box = boundingBox(body);
+  for (std::size_t i = 0; i < config.map.obstacles.size(); ++i) {
+    const Polygon& obstacle = config.map.obstacles[i];
+    if (body_box.overlaps(boundingBox(obstacle)) && polygonsOverlap(body, obstacle)) {
+      r.fail(start, "sim.start", "the robot's footprint overlaps obstacle " + std::to_string(i) + " of the map " +
+                                     config.map_file.string() + ", got " + at);
+    }
+  }
+
+  if (const YAML::Node n = sim["movers"]; n.IsDefined()) {
+    config.sim.movers = static_cast<int>(r.integer(n, "sim.movers", 0, static_cast<long long>(hal::ObstacleFrame::kMaxObstacles)));
+  }
+  if (const YAML::Node n = sim["mover_speed"]; n.IsDefined()) {
+    config.sim.mover_speed = r.finite(n, "sim.mover_speed");
+    if (config.sim.mover_speed < 0.0) r.fail(n, "sim.mover_speed", "must be >= 0 m/s, got " + n.Scalar());
+  }
+  if (const YAML::Node n = sim["mover_radius"]; n.IsDefined()) {
+    config.sim.mover_radius = r.above(n, "sim.mover_radius", 0.0, "must be > 0 m");
+  }
+  if (const YAML::Node n = sim["seed"]; n.IsDefined()) {
+    std::optional<std::uint64_t> seed;
+    if (n.IsScalar()) {
+      const std::string& t = n.Scalar();
+      std::uint64_t v = 0;
+      const auto res = std::from_chars(t.data(), t.data() + t.size(), v);
+      if (!t.empty() && res.ec == std::errc{} && res.ptr == t.data() + t.size()) seed = v;
+    }
+    if (!seed) r.fail(n, "sim.seed", "must be an integer >= 0, got " + (n.IsScalar() ? n.Scalar() : describe(n)));
+    config.sim.seed = *seed;
+  }
+  if (const YAML::Node n = sim["sensor_range_m"]; n.IsDefined()) {
+    config.sim.sensor_range_m = r.above(n, "sim.sensor_range_m", 0.0, "must be > 0 m");
+  }
+}
+
+void readThreads(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node threads = r.section(root, "threads", "threads", {"control", "base", "perception"});
+  if (!threads.IsDefined()) return;
+  auto thread = [&](const char* key, rt::ThreadSpec& spec) {
+    const std::string where = std::string("threads.") + key;
+    const YAML::Node t = r.section(threads, key, where, {"priority", "cpu"});
+    if (!t.IsDefined()) return;
+    if (const YAML::Node p = t["priority"]; p.IsDefined()) {
+      spec.priority = static_cast<int>(r.integer(p, where + ".priority", 0, kMaxPriority, " (0: normal scheduling, 1..99: SCHED_FIFO)"));
+    }
+    if (const YAML::Node c = t["cpu"]; c.IsDefined()) {
+      spec.cpu = static_cast<int>(r.integer(c, where + ".cpu", -1, kMaxCpu, " (-1: any CPU)"));
+    }
+  };
+  thread("control", config.control_thread);
+  thread("base", config.base_thread);
+  thread("perception", config.perception_thread);
+}
+
+void readSocket(const Reader& r, const YAML::Node& root, const fs::path& base, DaemonConfig& config) {
+  const YAML::Node socket = r.section(root, "socket", "socket", {"path", "mode"});
+  if (!socket.IsDefined()) return;
+  if (const YAML::Node p = socket["path"]; p.IsDefined()) {
+    const fs::path path = r.path(p, "socket.path", base);
+    config.socket_path = path.string();
+    if (config.socket_path.size() > kMaxSocketPathBytes) {
+      r.fail(p, "socket.path", "longer than " + std::to_string(kMaxSocketPathBytes) + " bytes (the limit of a Unix socket address), got " +
+                                   std::to_string(config.socket_path.size()) + " bytes: " + config.socket_path);
+    }
+  }
+  if (const YAML::Node m = socket["mode"]; m.IsDefined()) {
+    // Permission bits as people write them for chmod: octal with a leading 0 ("0660",
+    // also YAML 1.2's "0o660"). A plain integer without the 0 is taken as decimal (432 =
+    // 0660), which the range check turns into an error for a forgotten 0 ("660" > 0777).
+    std::optional<unsigned> mode;
+    if (m.IsScalar()) {
+      std::string_view t = m.Scalar();
+      int radix = 10;
+      if (t.size() > 2 && t[0] == '0' && (t[1] == 'o' || t[1] == 'O')) {
+        t.remove_prefix(2);
+        radix = 8;
+      } else if (t.size() > 1 && t[0] == '0') {
+        radix = 8;
+      }
+      unsigned v = 0;
+      const auto res = std::from_chars(t.data(), t.data() + t.size(), v, radix);
+      if (!t.empty() && res.ec == std::errc{} && res.ptr == t.data() + t.size() && v <= 0777u) mode = v;
+    }
+    if (!mode) {
+      r.fail(m, "socket.mode", "expected permission bits as an octal string like \"0660\" (0000..0777), got " +
+                                   (m.IsScalar() ? m.Scalar() : describe(m)));
+    }
+    config.socket_mode = *mode;
+  }
+}
+
+void readLimits(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node limits = r.section(root, "limits", "limits", {"odometry_timeout_s", "obstacles_timeout_s"});
+  if (limits.IsDefined()) {
+    if (const YAML::Node n = limits["odometry_timeout_s"]; n.IsDefined()) {
+      config.odometry_timeout_s = r.above(n, "limits.odometry_timeout_s", 0.0, "must be > 0 s");
+    }
+    if (const YAML::Node n = limits["obstacles_timeout_s"]; n.IsDefined()) {
+      config.obstacles_timeout_s = r.above(n, "limits.obstacles_timeout_s", 0.0, "must be > 0 s");
+    }
+  }
+  // A timeout shorter than its input's period would hold the robot in a fault forever.
+  auto longerThanPeriod = [&](const char* key, double timeout, double hz, const char* rate) {
+    const double period = 1.0 / hz;
+    if (!(timeout > period)) {
+      const YAML::Node n = limits.IsDefined() ? limits[key] : YAML::Node();
+      r.fail(n.IsDefined() ? n : root, std::string("limits.") + key,
+             "must be longer than one period of its input (" + number(period) + " s at rates." + rate + " " + number(hz) + "), got " +
+                 number(timeout));
+    }
+  };
+  longerThanPeriod("odometry_timeout_s", config.odometry_timeout_s, config.base_hz, "base_hz");
+  longerThanPeriod("obstacles_timeout_s", config.obstacles_timeout_s, config.perception_hz, "perception_hz");
+}
+
+void readGoal(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node goal = r.section(root, "goal", "goal", {"tolerance_m", "heading_tolerance"});
+  if (goal.IsDefined()) {
+    if (const YAML::Node n = goal["tolerance_m"]; n.IsDefined()) {
+      config.control.goal_tolerance_m = r.above(n, "goal.tolerance_m", 0.0, "must be > 0 m");
+    }
+    if (const YAML::Node n = goal["heading_tolerance"]; n.IsDefined()) {
+      config.control.goal_heading_tolerance = r.above(n, "goal.heading_tolerance", 0.0, "must be > 0 rad (> pi ignores the heading)");
+    }
+  }
+}
+
+void readTelemetry(const Reader& r, const YAML::Node& root, const fs::path& base, DaemonConfig& config) {
+  const YAML::Node telemetry = r.section(root, "telemetry", "telemetry", {"path", "records"});
+  if (!telemetry.IsDefined()) return;
+  if (const YAML::Node p = telemetry["path"]; p.IsDefined()) {
+    const std::string text = p.IsNull() ? std::string() : r.string(p, "telemetry.path", "a file path, or \"\" for off");
+    config.telemetry_path = text.empty() ? fs::path() : r.path(p, "telemetry.path", base);
+  }
+  if (const YAML::Node n = telemetry["records"]; n.IsDefined()) {
+    config.telemetry_records = static_cast<std::size_t>(r.integer(n, "telemetry.records", kMinTelemetryRecords, kMaxTelemetryRecords));
+  }
+}
+
+void readMemory(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node memory = r.section(root, "memory", "memory", {"heap_prefault_mb", "stack_prefault_kb"});
+  if (!memory.IsDefined()) return;
+  if (const YAML::Node n = memory["heap_prefault_mb"]; n.IsDefined()) {
+    config.heap_prefault_bytes = static_cast<std::size_t>(r.integer(n, "memory.heap_prefault_mb", 0, kMaxHeapPrefaultMb)) << 20;
+  }
+  if (const YAML::Node n = memory["stack_prefault_kb"]; n.IsDefined()) {
+    config.stack_prefault_bytes =
+        static_cast<std::size_t>(r.integer(n, "memory.stack_prefault_kb", 0, kMaxStackPrefaultKb, " (inside the 8 MiB default stack)")) << 10;
+  }
+}
+
+}  // namespace
+
+DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& source) {
+  const Reader r(source.string());
+  // Anchored absolutely: the daemon may change its working directory after loading.
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(source, ec);
+  const fs::path base = (ec ? source : absolute).parent_path();
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    std::string msg = source.string();
+    if (e.mark.line >= 0) msg += ":" + std::to_string(e.mark.line + 1);
+    throw ConfigError(msg + ": not valid YAML: " + e.msg);
+  }
+  if (!root.IsMap()) {
+    throw ConfigError(source.string() + ": expected a mapping with format: " + std::string(kFormat) + ", robot, map, ..., got " +
+                      describe(root));
+  }
+  r.onlyKeys(root, "", {"format", "robot", "map", "hal", "sim", "rates", "budget", "threads", "socket", "limits", "goal", "telemetry", "memory"});
+  const YAML::Node format = root["format"];
+  if (!Reader::present(format)) r.fail(root, "format", "missing (expected " + std::string(kFormat) + ")");
+  if (!format.IsScalar() || format.Scalar() != kFormat) {
+    r.fail(format, "format", "unknown format, expected " + std::string(kFormat) + ", got " + describe(format));
+  }
+
+  DaemonConfig config;
+  config.file = source;
+  if (const YAML::Node hal = root["hal"]; hal.IsDefined()) {
+    config.hal = r.string(hal, "hal", "sim or socketcan");
+    if (config.hal == "socketcan") {
+      r.fail(hal, "hal", "socketcan is not built yet (this staad has the simulated base only; use hal: sim), got socketcan");
+    }
+    if (config.hal != "sim") r.fail(hal, "hal", "expected sim or socketcan, got " + describe(hal));
+  }
+  readRobotAndMap(r, root, base, config);
+  readRates(r, root, config);
+  readBudget(r, root, config);
+  readSim(r, root, config);
+  readThreads(r, root, config);
+  readSocket(r, root, base, config);
+  readLimits(r, root, config);
+  readGoal(r, root, config);
+  readTelemetry(r, root, base, config);
+  readMemory(r, root, config);
+  config.control.rate_hz = config.control_hz;
+  return config;
+}
+
+DaemonConfig loadDaemonConfig(const fs::path& file) {
+  std::error_code ec;
+  const auto status = fs::status(file, ec);
+  if (!fs::exists(status)) throw ConfigError(file.string() + ": config file not found");
+  if (fs::is_directory(status)) throw ConfigError(file.string() + ": is a directory, not a config file");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ConfigError(file.string() + ": cannot open the config file: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError(file.string() + ": read error");
+  return parseDaemonConfig(text.str(), file);
+}
+
+}  // namespace staa::staad

@@ -1,0 +1,75 @@
+#pragma once
+// staad's configuration (YAML, default config/staad.yaml): robot profile, map, HAL, rates,
+// budgets, thread priorities, the control socket, staleness limits, telemetry. Relative
+// paths are relative to the config file. Any bad value stops start-up: ConfigError's
+// message names the file, the line, the key and the value ("staad.yaml:12: rates.control_hz:
+// must be in (0, 1000], got -3"); staad exits 2.
+//
+//   format: staad-config/1
+//   robot: ../robots/paper-agent.yaml        # staa-robot/1
+//   map: ../maps/office.yaml                 # staa-polygon-map/1
+//   hal: sim                                 # sim | socketcan (socketcan: not built yet)
+//   sim: {start: [1.5, 4.5, 0.0], movers: 3, mover_speed: 0.8, seed: 1}
+//   rates: {control_hz: 30, base_hz: 100, perception_hz: 30}
+//   budget: {ms: 19}                         # or {expansions: 1000}
+//   threads:                                 # priority 0: normal scheduling; cpu -1: any
+//     control: {priority: 80, cpu: -1}
+//     base: {priority: 85, cpu: -1}
+//     perception: {priority: 70, cpu: -1}
+//   socket: {path: /run/staad/staad.sock, mode: "0660"}
+//   limits: {odometry_timeout_s: 0.1, obstacles_timeout_s: 0.2}
+//   goal: {tolerance_m: 0.2, heading_tolerance: 0.4}
+//   telemetry: {path: "", records: 4096}     # empty path: off
+//   memory: {heap_prefault_mb: 64, stack_prefault_kb: 256}
+
+#include "control/control_cycle.hpp"
+#include "control/robot_profile.hpp"
+#include "hal/sim/sim_hal.hpp"
+#include "map/polygon_map.hpp"
+#include "rt/realtime.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace staa::staad {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct DaemonConfig {
+  std::filesystem::path file;        // where it was loaded from
+  std::filesystem::path robot_file;
+  RobotProfile robot;
+  std::filesystem::path map_file;
+  PolygonMap map;
+  std::string hal = "sim";           // sim | socketcan
+  hal::SimHalConfig sim;
+  double control_hz = 30.0;
+  double base_hz = 100.0;
+  double perception_hz = 30.0;
+  std::optional<std::uint32_t> budget_expansions;  // else budget_ms
+  double budget_ms = 19.0;
+  rt::ThreadSpec control_thread{"staad-control", 80, -1};
+  rt::ThreadSpec base_thread{"staad-base", 85, -1};
+  rt::ThreadSpec perception_thread{"staad-percept", 70, -1};
+  std::string socket_path = "/run/staad/staad.sock";
+  unsigned socket_mode = 0660;
+  double odometry_timeout_s = 0.1;
+  double obstacles_timeout_s = 0.2;
+  std::filesystem::path telemetry_path;  // empty: off
+  std::size_t telemetry_records = 4096;  // ring capacity (records)
+  std::size_t heap_prefault_bytes = 64u << 20;
+  std::size_t stack_prefault_bytes = 256u << 10;
+  ControlConfig control;  // rate_hz = control_hz; goal tolerances from `goal`
+};
+
+// Parses the YAML text; `source` names it in errors and anchors relative paths.
+DaemonConfig parseDaemonConfig(const std::string& yaml_text, const std::filesystem::path& source);
+DaemonConfig loadDaemonConfig(const std::filesystem::path& file);
+
+}  // namespace staa::staad

@@ -1,0 +1,274 @@
+#include "app/staad/protocol.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <initializer_list>
+#include <optional>
+
+namespace staa::staad {
+namespace {
+
+using Json = nlohmann::json;
+// Requests and replies keep "cmd" / "ok" first, so a person reading the socket with socat
+// sees what a line is before the rest of it.
+using OrderedJson = nlohmann::ordered_json;
+
+constexpr std::size_t kMaxShownChars = 40;
+
+// Dumps never throw: a string from the wire may hold invalid UTF-8, which would otherwise
+// make dump() throw (type_error 316) while we are only trying to report it.
+template <class J>
+std::string dumpSafe(const J& j) {
+  return j.dump(-1, ' ', false, J::error_handler_t::replace);
+}
+
+// Bytes a person can read on one line: control and non-ASCII bytes become \xNN (garbage on
+// the socket must not garble the log or the reply).
+std::string printable(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u < 0x7f) {
+      out += c;
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", static_cast<unsigned>(u));
+      out += buf;
+    }
+  }
+  return out;
+}
+
+std::string shortened(std::string text) {
+  if (text.size() > kMaxShownChars) {
+    text.resize(kMaxShownChars - 3);
+    text += "...";
+  }
+  return text;
+}
+
+// A short, single-line description of a JSON value for "got X" in messages.
+std::string describe(const Json& v) {
+  if (v.is_number_float()) {
+    const double d = v.get<double>();
+    if (std::isnan(d)) return "nan";
+    if (std::isinf(d)) return d > 0 ? "inf (a number too large for a double)" : "-inf (a number too large for a double)";
+  }
+  if (v.is_array()) return "an array of " + std::to_string(v.size()) + " items";
+  if (v.is_object()) return "an object";
+  return shortened(printable(dumpSafe(v)));
+}
+
+const char* kindName(const Json& v) {
+  switch (v.type()) {
+    case Json::value_t::null: return "null";
+    case Json::value_t::object: return "an object";
+    case Json::value_t::array: return "an array";
+    case Json::value_t::string: return "a string";
+    case Json::value_t::boolean: return "a boolean";
+    default: return "a number";
+  }
+}
+
+constexpr const char* kCommands = "goal, pose, stop or status";
+
+// A second, reporting-only pass over a line that nlohmann refused with out_of_range (a
+// number beyond a double, such as 1e999): the DOM parser does not say which key held it.
+class OverflowLocator final : public nlohmann::json_sax<Json> {
+ public:
+  std::string top_key;  // the top-level key being read when parsing stopped ("" when none)
+  std::string token;    // the text that failed
+
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool start_object(std::size_t) override { return ++depth_ > 0; }
+  bool key(string_t& k) override {
+    if (depth_ == 1) top_key = k;
+    return true;
+  }
+  bool end_object() override { return --depth_ >= 0; }
+  bool start_array(std::size_t) override { return ++depth_ > 0; }
+  bool end_array() override { return --depth_ >= 0; }
+  bool parse_error(std::size_t, const std::string& last_token, const nlohmann::detail::exception&) override {
+    token = last_token;
+    if (depth_ != 1) top_key.clear();  // nested: the top-level key is not the number's own
+    return false;
+  }
+
+ private:
+  int depth_ = 0;
+};
+
+std::optional<RequestKind> commandKind(const std::string& cmd) {
+  for (const RequestKind k : {RequestKind::kGoal, RequestKind::kPose, RequestKind::kStop, RequestKind::kStatus}) {
+    if (cmd == toString(k)) return k;
+  }
+  return std::nullopt;
+}
+
+// One coordinate of a goal or pose: a finite JSON number (booleans are not numbers here,
+// though nlohmann would convert them).
+std::variant<double, std::string> coordinate(const Json& object, const char* key, std::string_view cmd,
+                                             std::optional<double> fallback) {
+  const auto it = object.find(key);
+  if (it == object.end()) {
+    if (fallback) return *fallback;
+    return std::string("\"") + key + "\": missing (" + std::string(cmd) + " needs x and y in metres, theta optional)";
+  }
+  if (!it->is_number()) {
+    return std::string("\"") + key + "\": expected a number, got " + describe(*it);
+  }
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) return std::string("\"") + key + "\": must be a finite number, got " + describe(*it);
+  return v;
+}
+
+std::string joined(std::initializer_list<const char*> keys) {
+  std::string out;
+  for (const char* k : keys) {
+    if (!out.empty()) out += ", ";
+    out += k;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::variant<Request, std::string> parseRequest(std::string_view line) {
+  // A line as read from the socket may still end in "\n" or "\r\n" (socat, telnet).
+  if (!line.empty() && line.back() == '\n') line.remove_suffix(1);
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (line.size() > kMaxRequestBytes) {
+    return "request too long: " + std::to_string(line.size()) + " bytes (at most " + std::to_string(kMaxRequestBytes) + ")";
+  }
+  if (line.find_first_not_of(" \t") == std::string_view::npos) {
+    return std::string(R"(empty request (expected one JSON object per line, e.g. {"cmd": "status"}))");
+  }
+  Json j;
+  try {
+    j = Json::parse(line.begin(), line.end());
+  } catch (const Json::out_of_range&) {
+    OverflowLocator where;
+    Json::sax_parse(line.begin(), line.end(), &where);
+    const std::string got = shortened(printable(where.token));
+    if (!where.top_key.empty()) {
+      return "\"" + printable(where.top_key) + "\": must be a finite number, got " + got + " (out of range for a double)";
+    }
+    return "number out of range for a double: " + got;
+  } catch (const Json::exception& e) {
+    // what() is "[json.exception.parse_error.101] parse error at ...": keep the useful part.
+    std::string_view what = e.what();
+    if (const auto at = what.find("] "); at != std::string_view::npos) what.remove_prefix(at + 2);
+    return "not valid JSON: " + printable(what);
+  }
+  if (!j.is_object()) return std::string("expected a JSON object such as {\"cmd\": \"status\"}, got ") + kindName(j);
+
+  const auto cmd_it = j.find("cmd");
+  if (cmd_it == j.end()) return std::string("\"cmd\": missing (expected ") + kCommands + ")";
+  if (!cmd_it->is_string()) return "\"cmd\": expected a string (" + std::string(kCommands) + "), got " + describe(*cmd_it);
+  const std::string cmd = cmd_it->get<std::string>();
+  const auto kind = commandKind(cmd);
+  if (!kind) return "\"cmd\": unknown command " + describe(*cmd_it) + " (expected " + kCommands + ")";
+
+  const bool has_pose = *kind == RequestKind::kGoal || *kind == RequestKind::kPose;
+  // Unknown keys are errors: a typo ("thta") must not silently become theta = 0.
+  for (const auto& item : j.items()) {
+    const std::string& key = item.key();
+    const bool known = key == "cmd" || (has_pose && (key == "x" || key == "y" || key == "theta"));
+    if (!known) {
+      return "unknown key " + describe(Json(key)) + " for " + cmd + " (expected " +
+             (has_pose ? joined({"cmd", "x", "y", "theta"}) : std::string("cmd only")) + ")";
+    }
+  }
+
+  Request request;
+  request.kind = *kind;
+  if (has_pose) {
+    const auto x = coordinate(j, "x", cmd, std::nullopt);
+    if (const auto* err = std::get_if<std::string>(&x)) return *err;
+    const auto y = coordinate(j, "y", cmd, std::nullopt);
+    if (const auto* err = std::get_if<std::string>(&y)) return *err;
+    const auto theta = coordinate(j, "theta", cmd, 0.0);
+    if (const auto* err = std::get_if<std::string>(&theta)) return *err;
+    request.pose = Pose2{std::get<double>(x), std::get<double>(y), std::get<double>(theta)};
+  }
+  return request;
+}
+
+std::string requestLine(const Request& request) {
+  OrderedJson j;
+  j["cmd"] = toString(request.kind);
+  if (request.kind == RequestKind::kGoal || request.kind == RequestKind::kPose) {
+    // nlohmann writes the shortest text that reads back to the same double: exact round trip.
+    j["x"] = request.pose.x;
+    j["y"] = request.pose.y;
+    j["theta"] = request.pose.theta;
+  }
+  return dumpSafe(j) + "\n";
+}
+
+nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
+  Json j;
+  j["state"] = toString(status.state);
+  j["pose"] = {status.pose.x, status.pose.y, status.pose.theta};
+  j["velocity"] = {status.v, status.w};
+  j["goal"] = status.has_goal ? Json{status.goal.x, status.goal.y, status.goal.theta} : Json(nullptr);
+  switch (status.fault) {
+    case FaultKind::kNone: j["fault"] = nullptr; break;
+    case FaultKind::kStaleOdometry:
+    case FaultKind::kStaleObstacles: j["fault"] = toString(status.fault); break;
+    case FaultKind::kBase: {
+      std::string reason = "base: ";
+      reason += hal::toString(status.base_fault);
+      // The base's own code is what a technician looks up in its manual.
+      if (status.base_fault_code != 0) reason += " (code " + std::to_string(status.base_fault_code) + ")";
+      j["fault"] = reason;
+      break;
+    }
+    default: j["fault"] = "unknown"; break;
+  }
+  j["cycle"] = {{"p50_us", status.cycle_p50_us},
+                {"p99_us", status.cycle_p99_us},
+                {"max_us", status.cycle_max_us},
+                {"overruns", status.overruns},
+                {"count", status.cycles}};
+  j["rt_allocations"] = rt_allocations;
+
+  // Beyond the contract: what an engineer looks at when the contract's numbers look wrong.
+  j["command"] = {status.v_cmd, status.w_cmd};
+  j["wake"] = {{"p50_us", status.wake_p50_us}, {"p99_us", status.wake_p99_us}, {"max_us", status.wake_max_us}};
+  j["execution_overruns"] = status.execution_overruns;
+  j["late_wakeups"] = status.late_wakeups;
+  j["skipped_periods"] = status.skipped_periods;
+  // Never seen is null, not -1: a script comparing ages against a limit must not read -1 as fresh.
+  auto age = [](double s) { return s < 0.0 ? Json(nullptr) : Json(s); };
+  j["staleness"] = {{"odometry_s", age(status.odometry_age_s)}, {"obstacles_s", age(status.obstacles_age_s)}};
+  j["planner"] = {{"expansions", status.expansions}, {"depth", status.depth}};
+  j["realtime"] = status.realtime;
+  j["time_s"] = status.time_s;
+  return j;
+}
+
+std::string okReply() { return "{\"ok\":true}\n"; }
+
+std::string errorReply(std::string_view message) {
+  OrderedJson j;
+  j["ok"] = false;
+  j["error"] = std::string(message);
+  return dumpSafe(j) + "\n";
+}
+
+std::string statusReply(const Status& status, std::uint64_t rt_allocations) {
+  Json j;  // keys sorted: "ok" comes before "status" anyway
+  j["ok"] = true;
+  j["status"] = statusJson(status, rt_allocations);
+  return dumpSafe(j) + "\n";
+}
+
+}  // namespace staa::staad

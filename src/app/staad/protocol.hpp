@@ -1,0 +1,40 @@
+#pragma once
+// The control socket's protocol: line-delimited JSON over a Unix stream socket, one request
+// object per line, one reply object per line.
+//
+//   {"cmd": "goal", "x": 3.0, "y": 4.5, "theta": 1.57}  -> {"ok": true}
+//   {"cmd": "pose", "x": 1.0, "y": 1.0, "theta": 0.0}   -> {"ok": true}   (set / correct the pose)
+//   {"cmd": "stop"}                                     -> {"ok": true}   (brake, drop the goal)
+//   {"cmd": "status"}                                   -> {"ok": true, "status": {...}}
+//   anything else                                       -> {"ok": false, "error": "..."}
+//
+// "theta" is optional (0). Lines longer than kMaxRequestBytes are rejected with an error
+// (and the rest of that line discarded). Service thread only (allocates freely).
+
+#include "app/staad/status.hpp"
+
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <variant>
+
+namespace staa::staad {
+
+constexpr std::size_t kMaxRequestBytes = 4096;
+
+// A request, or the reason it is not one (names the field and the value).
+std::variant<Request, std::string> parseRequest(std::string_view line);
+
+std::string requestLine(const Request& request);  // the line staactl sends (with '\n')
+
+// The `status --json` object (ARCHITECTURE.md section 6): state, pose [x, y, theta],
+// velocity [v, w], goal ([x, y, theta] or null), fault (null or a reason), cycle {p50_us,
+// p99_us, max_us, overruns, count}, rt_allocations, plus wake-up latency, staleness and the
+// planner's last call.
+nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations);
+
+std::string okReply();                             // {"ok":true}\n
+std::string errorReply(std::string_view message);  // {"ok":false,"error":...}\n
+std::string statusReply(const Status& status, std::uint64_t rt_allocations);
+}  // namespace staa::staad

@@ -1,0 +1,60 @@
+#pragma once
+// What staad reports (ARCHITECTURE.md section 6, `staactl status --json`, a contract) and
+// the requests its control socket takes. Status is plain data: the control thread publishes
+// it through a triple buffer every cycle; the service thread turns it into JSON.
+
+#include "geometry/types.hpp"
+#include "hal/base.hpp"
+
+#include <cstdint>
+
+namespace staa::staad {
+
+enum class DaemonState : std::uint8_t { kIdle, kDriving, kReached, kUnreachable, kStopped, kFault };
+const char* toString(DaemonState state);  // "idle", "driving", ...
+
+// Why the robot is held (state kFault). Each one brakes the robot; each clears by itself when
+// its cause goes away (the state returns to driving toward the goal, or idle).
+enum class FaultKind : std::uint8_t {
+  kNone,
+  kStaleOdometry,   // no odometry for odometry_timeout
+  kStaleObstacles,  // no obstacle (depth) frame for obstacles_timeout
+  kBase,            // the base reports a fault (base_fault says which)
+};
+const char* toString(FaultKind fault);  // "none", "stale_odometry", "stale_obstacles", "base"
+
+struct Status {
+  DaemonState state = DaemonState::kIdle;
+  Pose2 pose;
+  double v = 0.0, w = 0.0;            // measured
+  double v_cmd = 0.0, w_cmd = 0.0;    // commanded
+  bool has_goal = false;
+  Pose2 goal;
+  FaultKind fault = FaultKind::kNone;
+  hal::BaseFault base_fault = hal::BaseFault::kNone;
+  std::uint32_t base_fault_code = 0;
+  // Control thread timing (execution of a cycle, and its wake-up latency), microseconds.
+  std::uint64_t cycles = 0;
+  double cycle_p50_us = 0.0, cycle_p99_us = 0.0, cycle_max_us = 0.0;
+  double wake_p50_us = 0.0, wake_p99_us = 0.0, wake_max_us = 0.0;
+  std::uint64_t overruns = 0, execution_overruns = 0, late_wakeups = 0, skipped_periods = 0;
+  // Input staleness: seconds since the newest odometry / obstacle frame (-1: never seen).
+  double odometry_age_s = -1.0;
+  double obstacles_age_s = -1.0;
+  // The planner's last call.
+  std::uint32_t expansions = 0;
+  double depth = 0.0;
+  bool realtime = false;  // the control thread runs under SCHED_FIFO
+  double time_s = 0.0;    // monotonic time of the snapshot
+};
+
+enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus };
+const char* toString(RequestKind kind);  // "goal", "stop", "pose", "status"
+
+// A request from the control socket, passed to the control thread through an SpscRing.
+struct Request {
+  RequestKind kind = RequestKind::kStatus;
+  Pose2 pose;  // goal or pose
+};
+
+}  // namespace staa::staad

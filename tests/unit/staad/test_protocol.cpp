@@ -1,0 +1,251 @@
+#include "app/staad/protocol.hpp"
+
+#include <gtest/gtest.h>
+#include <gmock/gmock.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace staa::staad {
+namespace {
+
+using ::testing::HasSubstr;
+using Json = nlohmann::json;
+
+Request parsedOk(std::string_view line) {
+  auto r = parseRequest(line);
+  if (const auto* err = std::get_if<std::string>(&r)) {
+    ADD_FAILURE() << "rejected " << line << ": " << *err;
+    return {};
+  }
+  return std::get<Request>(r);
+}
+
+std::string parsedError(std::string_view line) {
+  auto r = parseRequest(line);
+  if (const auto* err = std::get_if<std::string>(&r)) return *err;
+  ADD_FAILURE() << "accepted " << line;
+  return "";
+}
+
+TEST(Protocol, EveryRequestKindRoundTripsBitForBit) {
+  const std::vector<Pose2> poses = {{3.0, 4.5, 1.57},
+                                    {0.1, -0.2, 0.3},
+                                    {-1e-300, 1e300, -3.141592653589793},
+                                    {12.000000000000002, 4.9406564584124654e-324, 0.0}};
+  for (const RequestKind kind : {RequestKind::kGoal, RequestKind::kPose}) {
+    for (const Pose2& p : poses) {
+      const std::string line = requestLine(Request{kind, p});
+      ASSERT_FALSE(line.empty());
+      EXPECT_EQ(line.back(), '\n');
+      EXPECT_EQ(line.find('\n'), line.size() - 1) << "one line: " << line;
+      EXPECT_LE(line.size(), kMaxRequestBytes);
+      const Request back = parsedOk(line);
+      EXPECT_EQ(back.kind, kind) << line;
+      // Exact: the text is the shortest that reads back to the same double.
+      EXPECT_EQ(std::memcmp(&back.pose.x, &p.x, sizeof(double)), 0) << line;
+      EXPECT_EQ(std::memcmp(&back.pose.y, &p.y, sizeof(double)), 0) << line;
+      EXPECT_EQ(std::memcmp(&back.pose.theta, &p.theta, sizeof(double)), 0) << line;
+    }
+  }
+  for (const RequestKind kind : {RequestKind::kStop, RequestKind::kStatus}) {
+    const std::string line = requestLine(Request{kind, {}});
+    EXPECT_EQ(line, std::string("{\"cmd\":\"") + toString(kind) + "\"}\n");
+    EXPECT_EQ(parsedOk(line).kind, kind);
+  }
+}
+
+TEST(Protocol, AcceptsWhatPeopleTypeBySocat) {
+  const Request goal = parsedOk(R"({"cmd": "goal", "x": 3, "y": -4.5})");
+  EXPECT_EQ(goal.kind, RequestKind::kGoal);
+  EXPECT_DOUBLE_EQ(goal.pose.x, 3.0);  // integers are numbers too
+  EXPECT_DOUBLE_EQ(goal.pose.y, -4.5);
+  EXPECT_DOUBLE_EQ(goal.pose.theta, 0.0);  // theta is optional
+  EXPECT_EQ(parsedOk("{\"cmd\":\"status\"}\r\n").kind, RequestKind::kStatus);  // telnet's line end
+  EXPECT_EQ(parsedOk("  { \"cmd\" : \"stop\" }  ").kind, RequestKind::kStop);
+  const Request pose = parsedOk(R"({"theta": -1.5e0, "y": 2, "x": 1, "cmd": "pose"})");  // any key order
+  EXPECT_EQ(pose.kind, RequestKind::kPose);
+  EXPECT_DOUBLE_EQ(pose.pose.theta, -1.5);
+}
+
+struct Malformed {
+  std::string line;
+  std::vector<std::string> expected;  // substrings of the reason
+};
+
+// Binary garbage, a NUL and a terminal escape sequence included.
+constexpr char kGarbage[] = "\xff\xfe\x00\x01\x80garbage\x1b[2J";
+
+TEST(Protocol, MalformedRequestsAreRejectedWithTheFieldAndValue) {
+  const std::vector<Malformed> cases = {
+      {"", {"empty request"}},
+      {"   \t ", {"empty request"}},
+      {"{", {"not valid JSON", "column 2"}},
+      {"[]", {"expected a JSON object", "an array"}},
+      {"42", {"expected a JSON object", "a number"}},
+      {R"("goal")", {"expected a JSON object", "a string"}},
+      {R"({"cmd":5})", {"\"cmd\"", "expected a string", "got 5"}},
+      {R"({"cmd":"fly"})", {"\"cmd\"", "unknown command \"fly\"", "goal, pose, stop or status"}},
+      {R"({"x":1,"y":2})", {"\"cmd\": missing"}},
+      {R"({"cmd":"goal","x":1})", {"\"y\": missing", "goal needs x and y"}},
+      {R"({"cmd":"pose","y":1})", {"\"x\": missing", "pose"}},
+      {R"({"cmd":"goal","x":"a","y":1})", {"\"x\"", "expected a number", "got \"a\""}},
+      {R"({"cmd":"goal","x":1,"y":true})", {"\"y\"", "expected a number", "got true"}},
+      {R"({"cmd":"goal","x":1,"y":2,"theta":null})", {"\"theta\"", "expected a number", "got null"}},
+      {R"({"cmd":"goal","x":[1],"y":2})", {"\"x\"", "an array of 1 items"}},
+      {R"({"cmd":"goal","x":1e999,"y":1})", {"\"x\"", "finite", "got 1e999"}},
+      {R"({"cmd":"goal","y":1,"x":-1e999})", {"\"x\"", "finite", "got -1e999"}},
+      {R"({"cmd":"goal","x":1,"y":[1e400]})", {"out of range", "1e400"}},
+      {R"({"cmd":"goal","x":NaN,"y":1})", {"not valid JSON"}},
+      {R"({"cmd":"goal","x":1,"y":2,"thta":1})", {"unknown key \"thta\"", "for goal", "cmd, x, y, theta"}},
+      {R"({"cmd":"stop","x":1})", {"unknown key \"x\"", "for stop", "cmd only"}},
+      {R"({"cmd":"status"} {"cmd":"stop"})", {"not valid JSON"}},
+      {std::string(5000, ' ') + R"({"cmd":"status"})", {"request too long", "5016 bytes", "at most 4096"}},
+      {std::string(kGarbage, sizeof kGarbage - 1), {"not valid JSON"}},
+      {"{\"cmd\":\"\xff\xfe\"}", {"not valid JSON"}},  // invalid UTF-8 inside a string
+      {"{\"cmd\":\"goal\",\"x\":1,\"y\":2,\"\xc3\xa9\":1}", {"unknown key", "\\xc3\\xa9"}},
+  };
+  for (const Malformed& c : cases) {
+    const std::string error = parsedError(c.line);
+    SCOPED_TRACE(c.line.substr(0, 60) + "  ->  " + error);
+    for (const std::string& e : c.expected) EXPECT_THAT(error, HasSubstr(e));
+    // The reason is one printable line: garbage on the socket must not garble logs or replies.
+    for (const char ch : error) {
+      EXPECT_TRUE(ch >= 0x20 && ch < 0x7f) << "byte " << static_cast<int>(static_cast<unsigned char>(ch));
+    }
+    EXPECT_LE(error.size(), 400u);
+    // And it travels back as a valid error reply.
+    const std::string reply = errorReply(error);
+    ASSERT_EQ(reply.back(), '\n');
+    const Json j = Json::parse(reply);
+    EXPECT_EQ(j["ok"], false);
+    EXPECT_EQ(j["error"], error);
+  }
+}
+
+TEST(Protocol, ErrorReplyStaysValidJsonForAnyBytes) {
+  const Json j = Json::parse(errorReply("bad \xff\"quote\"\nnewline"));
+  EXPECT_EQ(j["ok"], false);
+  EXPECT_THAT(j["error"].get<std::string>(), HasSubstr("\"quote\""));
+  EXPECT_EQ(okReply(), "{\"ok\":true}\n");
+  EXPECT_EQ(errorReply("x").find('\n'), errorReply("x").size() - 1);
+}
+
+Status filledStatus() {
+  Status s;
+  s.state = DaemonState::kDriving;
+  s.pose = {1.5, 4.5, 0.25};
+  s.v = 0.2;
+  s.w = -0.1;
+  s.v_cmd = 0.22;
+  s.w_cmd = -0.05;
+  s.has_goal = true;
+  s.goal = {12.0, 4.5, 1.57};
+  s.cycles = 12345;
+  s.cycle_p50_us = 850.0;
+  s.cycle_p99_us = 4100.0;
+  s.cycle_max_us = 9000.5;
+  s.wake_p50_us = 40.0;
+  s.wake_p99_us = 120.0;
+  s.wake_max_us = 600.0;
+  s.overruns = 2;
+  s.execution_overruns = 1;
+  s.late_wakeups = 3;
+  s.skipped_periods = 4;
+  s.odometry_age_s = 0.004;
+  s.obstacles_age_s = -1.0;
+  s.expansions = 1000;
+  s.depth = 7.5;
+  s.realtime = true;
+  s.time_s = 321.5;
+  return s;
+}
+
+TEST(Protocol, StatusJsonHasEveryContractKeyWithItsValue) {
+  const Json j = statusJson(filledStatus(), 17);
+  EXPECT_EQ(j["state"], "driving");
+  EXPECT_EQ(j["pose"], Json({1.5, 4.5, 0.25}));
+  EXPECT_EQ(j["velocity"], Json({0.2, -0.1}));
+  EXPECT_EQ(j["goal"], Json({12.0, 4.5, 1.57}));
+  ASSERT_TRUE(j.contains("fault"));
+  EXPECT_TRUE(j["fault"].is_null());
+  const Json& cycle = j["cycle"];
+  EXPECT_EQ(cycle["p50_us"], 850.0);
+  EXPECT_EQ(cycle["p99_us"], 4100.0);
+  EXPECT_EQ(cycle["max_us"], 9000.5);
+  EXPECT_EQ(cycle["overruns"], 2);
+  EXPECT_EQ(cycle["count"], 12345);
+  EXPECT_EQ(j["rt_allocations"], 17);
+  EXPECT_TRUE(j["rt_allocations"].is_number_unsigned());
+  // The extra keys.
+  EXPECT_EQ(j["command"], Json({0.22, -0.05}));
+  EXPECT_EQ(j["wake"]["p50_us"], 40.0);
+  EXPECT_EQ(j["wake"]["p99_us"], 120.0);
+  EXPECT_EQ(j["wake"]["max_us"], 600.0);
+  EXPECT_EQ(j["execution_overruns"], 1);
+  EXPECT_EQ(j["late_wakeups"], 3);
+  EXPECT_EQ(j["skipped_periods"], 4);
+  EXPECT_EQ(j["staleness"]["odometry_s"], 0.004);
+  ASSERT_TRUE(j["staleness"].contains("obstacles_s"));
+  EXPECT_TRUE(j["staleness"]["obstacles_s"].is_null());  // never seen: null, not -1
+  EXPECT_EQ(j["planner"]["expansions"], 1000);
+  EXPECT_EQ(j["planner"]["depth"], 7.5);
+  EXPECT_EQ(j["realtime"], true);
+  EXPECT_EQ(j["time_s"], 321.5);
+}
+
+TEST(Protocol, StatusJsonGoalIsNullWithoutAGoalAndEveryStateHasItsName) {
+  Status s = filledStatus();
+  s.has_goal = false;
+  EXPECT_TRUE(statusJson(s, 0)["goal"].is_null());
+  const std::vector<std::pair<DaemonState, const char*>> states = {
+      {DaemonState::kIdle, "idle"},       {DaemonState::kDriving, "driving"}, {DaemonState::kReached, "reached"},
+      {DaemonState::kUnreachable, "unreachable"}, {DaemonState::kStopped, "stopped"}, {DaemonState::kFault, "fault"}};
+  for (const auto& [state, name] : states) {
+    s.state = state;
+    EXPECT_EQ(statusJson(s, 0)["state"], name);
+  }
+}
+
+TEST(Protocol, StatusJsonFaultNamesTheReason) {
+  Status s = filledStatus();
+  s.state = DaemonState::kFault;
+  s.fault = FaultKind::kStaleOdometry;
+  EXPECT_EQ(statusJson(s, 0)["fault"], "stale_odometry");
+  s.fault = FaultKind::kStaleObstacles;
+  EXPECT_EQ(statusJson(s, 0)["fault"], "stale_obstacles");
+  s.fault = FaultKind::kBase;
+  s.base_fault = hal::BaseFault::kEmergencyStop;
+  s.base_fault_code = 0;
+  EXPECT_EQ(statusJson(s, 0)["fault"], std::string("base: ") + hal::toString(hal::BaseFault::kEmergencyStop));
+  s.base_fault = hal::BaseFault::kDriverFault;
+  s.base_fault_code = 0x2310;
+  EXPECT_EQ(statusJson(s, 0)["fault"], std::string("base: ") + hal::toString(hal::BaseFault::kDriverFault) + " (code 8976)");
+}
+
+TEST(Protocol, StatusReplyCarriesTheStatusObject) {
+  const std::string reply = statusReply(filledStatus(), 3);
+  ASSERT_EQ(reply.back(), '\n');
+  EXPECT_EQ(reply.find('\n'), reply.size() - 1);
+  const Json j = Json::parse(reply);
+  EXPECT_EQ(j["ok"], true);
+  EXPECT_EQ(j["status"], statusJson(filledStatus(), 3));
+}
+
+TEST(Protocol, NamesOfEnumsAreTheContractSpellings) {
+  EXPECT_STREQ(toString(FaultKind::kNone), "none");
+  EXPECT_STREQ(toString(FaultKind::kStaleOdometry), "stale_odometry");
+  EXPECT_STREQ(toString(FaultKind::kStaleObstacles), "stale_obstacles");
+  EXPECT_STREQ(toString(FaultKind::kBase), "base");
+  EXPECT_STREQ(toString(RequestKind::kGoal), "goal");
+  EXPECT_STREQ(toString(RequestKind::kStop), "stop");
+  EXPECT_STREQ(toString(RequestKind::kPose), "pose");
+  EXPECT_STREQ(toString(RequestKind::kStatus), "status");
+  EXPECT_STREQ(toString(static_cast<DaemonState>(200)), "unknown");
+}
+
+}  // namespace
+}  // namespace staa::staad

@@ -1,0 +1,482 @@
+#include "app/staad/config.hpp"
+
+#include "shared_dir.hpp"
+
+#include <gtest/gtest.h>
+#include <gmock/gmock.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace staa::staad {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// A complete config, one key per line, so that every bad value below has a line of its own.
+const std::string kValid = R"(format: staad-config/1
+robot: robots/hsr.yaml
+map: maps/office.yaml
+hal: sim
+sim:
+  start: [1.5, 4.5, 0.0]
+  movers: 2
+  mover_speed: 0.5
+  mover_radius: 0.3
+  seed: 7
+  sensor_range_m: 6.0
+rates:
+  control_hz: 30
+  base_hz: 100
+  perception_hz: 30
+budget:
+  ms: 19
+threads:
+  control: {priority: 80, cpu: -1}
+  base: {priority: 85, cpu: 0}
+  perception: {priority: 0, cpu: -1}
+socket:
+  path: /run/staad/staad.sock
+  mode: "0660"
+limits:
+  odometry_timeout_s: 0.1
+  obstacles_timeout_s: 0.2
+goal:
+  tolerance_m: 0.2
+  heading_tolerance: 0.4
+telemetry:
+  path: ""
+  records: 4096
+memory:
+  heap_prefault_mb: 64
+  stack_prefault_kb: 256
+)";
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A temporary folder with the shipped robot profile and map beside the config, as in config/.
+class ConfigFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("staad-config-test-" + std::to_string(::getpid()) + "-" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "robots");
+    fs::create_directories(dir_ / "maps");
+    fs::copy_file(test::sourceDir() / "config/robots/hsr.yaml", dir_ / "robots/hsr.yaml");
+    fs::copy_file(test::sourceDir() / "config/maps/office.yaml", dir_ / "maps/office.yaml");
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  fs::path write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    fs::create_directories(p.parent_path());
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+
+  std::string loadError(const std::string& text, const std::string& name = "staad.yaml") const {
+    const fs::path p = write(name, text);
+    try {
+      loadDaemonConfig(p);
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    ADD_FAILURE() << "no ConfigError for:\n" << text;
+    return "";
+  }
+
+  fs::path dir_;
+};
+
+// `text` (kValid by default) with `from` replaced by `to` (which must occur).
+std::string edited(const std::string& from, const std::string& to, std::string s = kValid) {
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
+// The 1-based line on which `what` first occurs in `text`.
+int lineOf(const std::string& text, const std::string& what) {
+  const auto at = text.find(what);
+  if (at == std::string::npos) return -1;
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+}
+
+TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
+  const fs::path file = test::sourceDir() / "config/staad.yaml";
+  const DaemonConfig c = loadDaemonConfig(file);
+  EXPECT_EQ(c.file, file);
+  EXPECT_EQ(c.robot_file, (test::sourceDir() / "config/robots/hsr.yaml").lexically_normal());
+  EXPECT_EQ(c.robot.name, "hsr");
+  EXPECT_DOUBLE_EQ(c.robot.limits.v_max, 0.22);
+  EXPECT_EQ(c.map_file, (test::sourceDir() / "config/maps/office.yaml").lexically_normal());
+  EXPECT_EQ(c.map.name, "office");
+  EXPECT_FALSE(c.map.obstacles.empty());
+  EXPECT_EQ(c.hal, "sim");
+  EXPECT_DOUBLE_EQ(c.sim.start.x, 1.5);
+  EXPECT_DOUBLE_EQ(c.sim.start.y, 4.5);
+  EXPECT_DOUBLE_EQ(c.sim.start.theta, 0.0);
+  EXPECT_EQ(c.sim.movers, 3);
+  EXPECT_DOUBLE_EQ(c.sim.mover_speed, 0.8);
+  EXPECT_DOUBLE_EQ(c.sim.mover_radius, 0.25);
+  EXPECT_EQ(c.sim.seed, 1u);
+  EXPECT_DOUBLE_EQ(c.sim.sensor_range_m, 8.0);
+  EXPECT_DOUBLE_EQ(c.sim.obstacle_rate_hz, 30.0);
+  EXPECT_DOUBLE_EQ(c.control_hz, 30.0);
+  EXPECT_DOUBLE_EQ(c.base_hz, 100.0);
+  EXPECT_DOUBLE_EQ(c.perception_hz, 30.0);
+  EXPECT_FALSE(c.budget_expansions.has_value());
+  EXPECT_DOUBLE_EQ(c.budget_ms, 19.0);
+  EXPECT_EQ(c.control_thread.priority, 80);
+  EXPECT_EQ(c.base_thread.priority, 85);
+  EXPECT_EQ(c.perception_thread.priority, 70);
+  EXPECT_EQ(c.control_thread.cpu, -1);
+  EXPECT_EQ(c.base_thread.cpu, -1);
+  EXPECT_EQ(c.perception_thread.cpu, -1);
+  EXPECT_EQ(c.control_thread.name, "staad-control");
+  EXPECT_EQ(c.socket_path, "/run/staad/staad.sock");
+  EXPECT_EQ(c.socket_mode, 0660u);
+  EXPECT_DOUBLE_EQ(c.odometry_timeout_s, 0.1);
+  EXPECT_DOUBLE_EQ(c.obstacles_timeout_s, 0.2);
+  EXPECT_TRUE(c.telemetry_path.empty());
+  EXPECT_EQ(c.telemetry_records, 4096u);
+  EXPECT_EQ(c.heap_prefault_bytes, std::size_t{64} << 20);
+  EXPECT_EQ(c.stack_prefault_bytes, std::size_t{256} << 10);
+  EXPECT_DOUBLE_EQ(c.control.rate_hz, 30.0);
+  EXPECT_DOUBLE_EQ(c.control.goal_tolerance_m, 0.2);
+  EXPECT_DOUBLE_EQ(c.control.goal_heading_tolerance, 0.4);
+}
+
+TEST_F(ConfigFiles, ReadsEveryKeyOfAValidConfig) {
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", kValid));
+  EXPECT_EQ(c.sim.movers, 2);
+  EXPECT_DOUBLE_EQ(c.sim.mover_speed, 0.5);
+  EXPECT_DOUBLE_EQ(c.sim.mover_radius, 0.3);
+  EXPECT_EQ(c.sim.seed, 7u);
+  EXPECT_DOUBLE_EQ(c.sim.sensor_range_m, 6.0);
+  EXPECT_EQ(c.base_thread.cpu, 0);
+  EXPECT_EQ(c.perception_thread.priority, 0);
+}
+
+// The bad value, the key that holds it and its line must all be in the message.
+struct BadCase {
+  std::string from;
+  std::string to;
+  std::vector<const char*> expected;  // substrings of the message
+  bool check_line = true;             // the message names the line of `to`
+};
+
+TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
+  const std::vector<BadCase> cases = {
+      {"control_hz: 30", "control_hz: -3", {"rates.control_hz", "(0, 1000]", "got -3"}},
+      {"control_hz: 30", "control_hz: 1001", {"rates.control_hz", "1001"}},
+      {"control_hz: 30", "control_hz: abc", {"rates.control_hz", "expected a number", "'abc'"}},
+      {"base_hz: 100", "base_hz: .inf", {"rates.base_hz", "finite", ".inf"}},
+      {"perception_hz: 30", "perception_hz: 0", {"rates.perception_hz", "got 0"}},
+      {"ms: 19", "ms: 40", {"budget.ms", "control period", "got 40"}},
+      {"ms: 19", "ms: 0", {"budget.ms", "got 0"}},
+      {"ms: 19", "expansions: 0", {"budget.expansions", "1..4294967295", "got 0"}},
+      {"ms: 19", "expansions: 1.5", {"budget.expansions", "integer", "1.5"}},
+      {"ms: 19", "{}", {"budget", "got neither"}, false},
+      {"control: {priority: 80", "control: {priority: 120", {"threads.control.priority", "0..99", "120"}},
+      {"control: {priority: 80", "control: {priority: -1", {"threads.control.priority", "-1"}},
+      {"base: {priority: 85, cpu: 0}", "base: {priority: 85, cpu: -2}", {"threads.base.cpu", "-1..1023", "-2"}},
+      {"perception: {priority: 0, cpu: -1}", "perception: {priority: 0, cpu: 1024}", {"threads.perception.cpu", "1024"}},
+      {"mode: \"0660\"", "mode: \"0999\"", {"socket.mode", "octal", "0999"}},
+      {"mode: \"0660\"", "mode: rw-rw----", {"socket.mode", "rw-rw----"}},
+      {"mode: \"0660\"", "mode: 660", {"socket.mode", "660"}},
+      {"mode: \"0660\"", "mode: \"01777\"", {"socket.mode", "01777"}},
+      {"odometry_timeout_s: 0.1", "odometry_timeout_s: 0", {"limits.odometry_timeout_s", "> 0", "got 0"}},
+      {"odometry_timeout_s: 0.1", "odometry_timeout_s: 0.005", {"limits.odometry_timeout_s", "base_hz", "0.005"}},
+      {"obstacles_timeout_s: 0.2", "obstacles_timeout_s: -1", {"limits.obstacles_timeout_s", "-1"}},
+      {"tolerance_m: 0.2", "tolerance_m: 0", {"goal.tolerance_m", "got 0"}},
+      {"heading_tolerance: 0.4", "heading_tolerance: nope", {"goal.heading_tolerance", "'nope'"}},
+      {"records: 4096", "records: 8", {"telemetry.records", "16..", "8"}},
+      {"records: 4096", "records: many", {"telemetry.records", "many"}},
+      {"path: \"\"", "path: [a, b]", {"telemetry.path", "a list of 2 items"}},
+      {"heap_prefault_mb: 64", "heap_prefault_mb: 5000", {"memory.heap_prefault_mb", "0..4096", "5000"}},
+      {"stack_prefault_kb: 256", "stack_prefault_kb: -4", {"memory.stack_prefault_kb", "-4"}},
+      {"hal: sim", "hal: can", {"hal", "sim or socketcan", "'can'"}},
+      {"hal: sim", "hal: socketcan", {"hal", "socketcan is not built yet", "use hal: sim"}},
+      {"start: [1.5, 4.5, 0.0]", "start: [1.5, 4.5]", {"sim.start", "[x, y, theta]", "a list of 2 items"}},
+      {"start: [1.5, 4.5, 0.0]", "start: [1.5, .nan, 0.0]", {"sim.start[1]", "finite", ".nan"}},
+      {"start: [1.5, 4.5, 0.0]", "start: [1.5, x, 0.0]", {"sim.start[1]", "'x'"}},
+      {"start: [1.5, 4.5, 0.0]", "start: [1.5, 1.5, 0.0]", {"sim.start", "overlaps obstacle 0", "office.yaml", "[1.5, 1.5, 0]"}},
+      {"start: [1.5, 4.5, 0.0]", "start: [1.5, 3.1, 0.0]", {"sim.start", "overlaps obstacle", "[1.5, 3.1, 0]"}},
+      {"start: [1.5, 4.5, 0.0]", "start: [-5, 4.5, 0.0]", {"sim.start", "outside the map's bounds", "[-5, 4.5, 0]"}},
+      {"movers: 2", "movers: 40", {"sim.movers", "0..32", "40"}},
+      {"movers: 2", "movers: 2.5", {"sim.movers", "2.5"}},
+      {"mover_speed: 0.5", "mover_speed: -1", {"sim.mover_speed", ">= 0", "-1"}},
+      {"mover_radius: 0.3", "mover_radius: 0", {"sim.mover_radius", "> 0", "got 0"}},
+      {"seed: 7", "seed: -1", {"sim.seed", "-1"}},
+      {"sensor_range_m: 6.0", "sensor_range_m: -.inf", {"sim.sensor_range_m", "-.inf"}},
+      {"format: staad-config/1", "format: staad-config/2", {"format", "staad-config/1", "'staad-config/2'"}},
+      {"path: /run/staad/staad.sock", "path: /run/" + std::string(120, 's') + ".sock", {"socket.path", "107 bytes"}},
+      // Typos are errors, not silently ignored keys.
+      {"control_hz: 30", "control_hzz: 30", {"rates.control_hzz", "unknown key", "control_hz, base_hz, perception_hz"}},
+      {"hal: sim", "hal: sim\ncolour: blue", {"colour", "unknown key 'colour'"}},
+      {"  movers: 2", "  movers: 2\n  mover: 3", {"sim.mover", "unknown key"}},
+      {"control: {priority: 80, cpu: -1}", "control: {priority: 80, cpus: -1}", {"threads.control.cpus", "unknown key"}},
+      {"rates:\n  control_hz: 30", "rates:\n  control_hz: 30\n  control_hz: 20", {"rates.control_hz", "given twice", "line 13"}},
+      {"rates:\n  control_hz: 30\n  base_hz: 100\n  perception_hz: 30", "rates: 30", {"rates", "expected a mapping", "'30'"}},
+  };
+  for (const BadCase& c : cases) {
+    const std::string text = edited(c.from, c.to);
+    const std::string error = loadError(text);
+    SCOPED_TRACE(c.to + "  ->  " + error);
+    for (const char* e : c.expected) EXPECT_THAT(error, HasSubstr(e));
+    EXPECT_THAT(error, HasSubstr((dir_ / "staad.yaml").string()));
+    if (c.check_line) {
+      // The last line of `to` holds the bad value (multi-line `to`s add the bad key last).
+      const int line = lineOf(text, c.to) + static_cast<int>(std::count(c.to.begin(), c.to.end(), '\n'));
+      EXPECT_THAT(error, HasSubstr("staad.yaml:" + std::to_string(line) + ": "));
+    }
+  }
+}
+
+TEST_F(ConfigFiles, BudgetInMillisecondsAndExpansionsTogetherIsRejected) {
+  const std::string error = loadError(edited("ms: 19", "ms: 19\n  expansions: 1000"));
+  EXPECT_THAT(error, HasSubstr("budget"));
+  EXPECT_THAT(error, HasSubstr("not both"));
+  EXPECT_THAT(error, HasSubstr("ms 19 and expansions 1000"));
+  EXPECT_THAT(error, HasSubstr("staad.yaml:16: "));  // the budget mapping's line
+}
+
+TEST_F(ConfigFiles, ExpansionBudgetReplacesTheWallClock) {
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", edited("ms: 19", "expansions: 1000")));
+  ASSERT_TRUE(c.budget_expansions.has_value());
+  EXPECT_EQ(*c.budget_expansions, 1000u);
+}
+
+TEST_F(ConfigFiles, BudgetMustFitTheControlPeriod) {
+  // 19 ms is fine at 30 Hz but not at 100 Hz (a 10 ms period).
+  const std::string error = loadError(edited("control_hz: 30", "control_hz: 100"));
+  EXPECT_THAT(error, HasSubstr("budget.ms"));
+  EXPECT_THAT(error, HasSubstr("10 ms at control_hz 100"));
+  EXPECT_THAT(error, HasSubstr("got 19"));
+  const DaemonConfig c = loadDaemonConfig(write("fast.yaml", edited("ms: 19", "ms: 6", edited("control_hz: 30", "control_hz: 100"))));
+  EXPECT_DOUBLE_EQ(c.budget_ms, 6.0);
+  EXPECT_DOUBLE_EQ(c.control.rate_hz, 100.0);
+}
+
+TEST_F(ConfigFiles, SocketModeAcceptsOctalTextAndIntegers) {
+  auto modeOf = [&](const std::string& mode) {
+    return loadDaemonConfig(write("staad.yaml", edited("mode: \"0660\"", "mode: " + mode))).socket_mode;
+  };
+  EXPECT_EQ(modeOf("\"0640\""), 0640u);
+  EXPECT_EQ(modeOf("0600"), 0600u);   // unquoted: the text is still read as octal
+  EXPECT_EQ(modeOf("0o660"), 0660u);  // YAML 1.2's octal spelling
+  EXPECT_EQ(modeOf("416"), 0640u);    // a plain integer is the number itself
+}
+
+TEST_F(ConfigFiles, OnlyFormatRobotMapAndStartAreRequired) {
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", R"(format: staad-config/1
+robot: robots/hsr.yaml
+map: maps/office.yaml
+sim: {start: [1.5, 4.5, 0.0]}
+)"));
+  const DaemonConfig defaults;
+  EXPECT_EQ(c.hal, "sim");
+  EXPECT_DOUBLE_EQ(c.control_hz, defaults.control_hz);
+  EXPECT_DOUBLE_EQ(c.budget_ms, defaults.budget_ms);
+  EXPECT_EQ(c.socket_path, defaults.socket_path);
+  EXPECT_EQ(c.socket_mode, defaults.socket_mode);
+  EXPECT_EQ(c.sim.movers, hal::SimHalConfig{}.movers);
+  EXPECT_EQ(c.telemetry_records, defaults.telemetry_records);
+
+  EXPECT_THAT(loadError("format: staad-config/1\nrobot: robots/hsr.yaml\nmap: maps/office.yaml\n"),
+              HasSubstr("sim: missing (hal: sim needs at least sim.start"));
+  EXPECT_THAT(loadError("format: staad-config/1\nmap: maps/office.yaml\n"), HasSubstr("robot: missing"));
+  EXPECT_THAT(loadError("robot: robots/hsr.yaml\n"), HasSubstr("format: missing (expected staad-config/1)"));
+  EXPECT_THAT(loadError(""), HasSubstr("expected a mapping"));
+  EXPECT_THAT(loadError("rates: {control_hz: 30\n"), HasSubstr("not valid YAML"));
+  EXPECT_THAT(loadError("- a\n- b\n"), HasSubstr("got a list of 2 items"));
+}
+
+TEST_F(ConfigFiles, MissingMapFileNamesThePath) {
+  const std::string error = loadError(edited("map: maps/office.yaml", "map: maps/nowhere.yaml"));
+  EXPECT_THAT(error, HasSubstr("staad.yaml:3: map: file not found: " + (dir_ / "maps/nowhere.yaml").string()));
+  EXPECT_THAT(error, HasSubstr("maps/nowhere.yaml relative to the config's directory"));
+
+  const std::string robot = loadError(edited("robot: robots/hsr.yaml", "robot: /nonexistent/hsr.yaml"));
+  EXPECT_THAT(robot, HasSubstr("staad.yaml:2: robot: file not found: /nonexistent/hsr.yaml"));
+
+  EXPECT_THAT(loadError(edited("map: maps/office.yaml", "map: maps")), HasSubstr("map: is a directory"));
+}
+
+TEST_F(ConfigFiles, ErrorsOfTheRobotAndMapFilesAreRethrownUnderTheirKey) {
+  write("maps/broken.yaml", "format: staa-polygon-map/1\nobstacles:\n  - [[0, 0], [1, 0]]\n");
+  const std::string map = loadError(edited("map: maps/office.yaml", "map: maps/broken.yaml"));
+  EXPECT_THAT(map, HasSubstr("staad.yaml:3: map: " + (dir_ / "maps/broken.yaml").string()));
+  EXPECT_THAT(map, HasSubstr("vertices"));
+
+  write("robots/bad.yaml", "format: staa-robot/1\nfootprint: [[0.2, 0.2], [-0.2, 0.2], [-0.2, -0.2], [0.2, -0.2]]\n"
+                           "limits: {v_max: -1, v_min: -1, w_max: 1, a_max: 1, b_max: 1}\n");
+  const std::string robot = loadError(edited("robot: robots/hsr.yaml", "robot: robots/bad.yaml"));
+  EXPECT_THAT(robot, HasSubstr("staad.yaml:2: robot: " + (dir_ / "robots/bad.yaml").string()));
+  EXPECT_THAT(robot, HasSubstr("limits.v_max"));
+}
+
+TEST_F(ConfigFiles, RelativePathsResolveAgainstTheConfigsDirectory) {
+  std::string text = edited("robot: robots/hsr.yaml", "robot: ../robots/hsr.yaml");
+  text.replace(text.find("map: maps/office.yaml"), 21, "map: " + (dir_ / "maps/office.yaml").string());
+  text.replace(text.find("path: /run/staad/staad.sock"), 27, "path: run/staad.sock");
+  text.replace(text.find("path: \"\""), 8, "path: logs/telemetry.bin");
+  const fs::path file = write("etc/staad.yaml", text);
+  // Started from another directory (systemd starts staad in /): the config's own folder counts.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(fs::temp_directory_path());
+  DaemonConfig c;
+  EXPECT_NO_THROW(c = loadDaemonConfig(file));
+  fs::current_path(cwd);
+  EXPECT_EQ(c.robot_file, dir_ / "robots/hsr.yaml");
+  EXPECT_EQ(c.map_file, dir_ / "maps/office.yaml");  // absolute: kept
+  EXPECT_EQ(c.socket_path, (dir_ / "etc/run/staad.sock").string());
+  EXPECT_EQ(c.telemetry_path, dir_ / "etc/logs/telemetry.bin");
+  EXPECT_EQ(c.robot.name, "hsr");
+}
+
+TEST_F(ConfigFiles, MissingConfigFileNamesThePath) {
+  try {
+    loadDaemonConfig(dir_ / "absent.yaml");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr((dir_ / "absent.yaml").string() + ": config file not found"));
+  }
+  EXPECT_THROW(loadDaemonConfig(dir_), ConfigError);
+}
+
+// ---- the systemd unit: `systemd-analyze verify` accepts it, and the check catches a broken one ----
+
+struct CommandRun {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+// Runs argv with a time limit (a hang fails the test instead of blocking CI).
+CommandRun runCommand(const std::vector<std::string>& args, const fs::path& output_file) {
+  std::vector<std::string> copy = args;
+  std::vector<char*> argv;
+  for (auto& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  CommandRun r;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = ::open(output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0 || ::dup2(fd, 1) < 0 || ::dup2(fd, 2) < 0) ::_exit(127);
+    ::execvp(argv[0], argv.data());
+    ::_exit(127);
+  }
+  if (pid < 0) return r;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  int status = 0;
+  for (;;) {
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    if (done == pid) break;
+    if (std::chrono::steady_clock::now() > deadline) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      r.output = "timed out";
+      return r;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  r.output = readFile(output_file);
+  return r;
+}
+
+bool onPath(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path != nullptr ? path : "/usr/bin:/bin");
+  for (std::string dir; std::getline(dirs, dir, ':');) {
+    if (!dir.empty() && ::access((fs::path(dir) / program).c_str(), X_OK) == 0) return true;
+  }
+  return false;
+}
+
+class SystemdUnit : public ConfigFiles {
+ protected:
+  // The shipped unit with ExecStart pointing at a binary that exists here (verify checks it),
+  // and `edit` applied, in a folder of its own (with the real-time drop-in when asked).
+  CommandRun verify(const std::string& name, const std::string& from = "", const std::string& to = "", bool dropin = false) {
+    const fs::path unit_dir = dir_ / name;
+    std::string unit = readFile(test::sourceDir() / "systemd/staad.service");
+    const auto exec = unit.find("ExecStart=/usr/bin/staad");
+    EXPECT_NE(exec, std::string::npos);
+    if (exec != std::string::npos) unit.replace(exec, std::string("ExecStart=/usr/bin/staad").size(), "ExecStart=/bin/true");
+    if (!from.empty()) {
+      const auto at = unit.find(from);
+      EXPECT_NE(at, std::string::npos) << from;
+      if (at != std::string::npos) unit.replace(at, from.size(), to);
+    }
+    write(name + "/staad.service", unit);
+    if (dropin) {
+      write(name + "/staad.service.d/realtime.conf",
+            readFile(test::sourceDir() / "systemd/staad.service.d/realtime.conf.example"));
+    }
+    return runCommand({"systemd-analyze", "verify", (unit_dir / "staad.service").string()}, dir_ / (name + ".out"));
+  }
+};
+
+TEST_F(SystemdUnit, VerifyAcceptsTheUnitAndRejectsBrokenCopies) {
+  if (!onPath("systemd-analyze")) GTEST_SKIP() << "systemd-analyze not found on PATH: the unit is not verified here";
+  // Can verify work at all in this environment (a container without systemd, say)?
+  write("probe/probe.service", "[Service]\nType=simple\nExecStart=/bin/true\n");
+  const CommandRun probe = runCommand({"systemd-analyze", "verify", (dir_ / "probe/probe.service").string()}, dir_ / "probe.out");
+  if (probe.exit_code != 0) GTEST_SKIP() << "systemd-analyze verify does not work here: " << probe.output;
+
+  const CommandRun ours = verify("ours");
+  EXPECT_EQ(ours.exit_code, 0) << ours.output;
+  // Warnings ("ignoring") do not change verify's exit code: none may name our unit.
+  EXPECT_THAT(ours.output, ::testing::Not(HasSubstr("staad.service"))) << ours.output;
+
+  const CommandRun with_dropin = verify("dropin", "", "", true);
+  EXPECT_EQ(with_dropin.exit_code, 0) << with_dropin.output;
+  EXPECT_THAT(with_dropin.output, ::testing::Not(HasSubstr("staad.service"))) << with_dropin.output;
+
+  // A missing executable fails verify outright ...
+  const CommandRun missing = verify("missing", "ExecStart=/bin/true", "ExecStart=/nonexistent/staad");
+  EXPECT_NE(missing.exit_code, 0) << missing.output;
+  EXPECT_THAT(missing.output, HasSubstr("/nonexistent/staad"));
+  // ... a bad value is reported (systemd 252 exits 0 for a value it ignores, so the output
+  // is what this check reads).
+  const CommandRun bogus = verify("bogus", "Type=notify", "Type=bogus");
+  EXPECT_TRUE(bogus.exit_code != 0 || bogus.output.find("staad.service:") != std::string::npos) << bogus.output;
+  EXPECT_THAT(bogus.output, HasSubstr("bogus"));
+}
+
+TEST(SystemdUnitText, HasTheSettingsTheDaemonReliesOn) {
+  const std::string unit = readFile(test::sourceDir() / "systemd/staad.service");
+  for (const char* line : {"Type=notify", "NotifyAccess=main", "ExecStart=/usr/bin/staad --config /etc/staad/staad.yaml",
+                           "WatchdogSec=2s", "Restart=on-failure", "RuntimeDirectory=staad", "LimitRTPRIO=95",
+                           "LimitMEMLOCK=infinity", "RestrictAddressFamilies=AF_UNIX AF_CAN AF_NETLINK", "RestrictRealtime=no",
+                           "User=staad", "DevicePolicy=closed", "DeviceAllow=char-usb_device rw"}) {
+    EXPECT_THAT(unit, HasSubstr(std::string("\n") + line + "\n")) << line;
+  }
+}
+
+}  // namespace
+}  // namespace staa::staad
