@@ -114,8 +114,10 @@ Notifier::~Notifier() {
 int Notifier::send(std::string_view message) const {
   if (fd_ < 0) return 0;
   for (;;) {
-    // MSG_NOSIGNAL: systemd going away must not kill the daemon with SIGPIPE.
-    const ssize_t n = ::sendto(fd_, message.data(), message.size(), MSG_NOSIGNAL,
+    // MSG_NOSIGNAL: systemd going away must not kill the daemon with SIGPIPE. MSG_DONTWAIT:
+    // a receiver that does not read (its queue full after ~10 datagrams) must not block the
+    // service thread; the message is dropped and EAGAIN returned.
+    const ssize_t n = ::sendto(fd_, message.data(), message.size(), MSG_NOSIGNAL | MSG_DONTWAIT,
                                reinterpret_cast<const sockaddr*>(&addr_), addr_len_);
     if (n >= 0) return 0;
     if (errno != EINTR) return errno;

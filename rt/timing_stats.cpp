@@ -57,7 +57,13 @@ double LatencyHistogram::percentileUs(double p) const {
   std::uint64_t seen = 0;
   for (std::uint32_t i = 0; i < bound_us_; ++i) {
     seen += bins_[i].load(std::memory_order_relaxed);
-    if (seen >= rank) return static_cast<double>(i) + 1.0;  // the bin's upper edge
+    if (seen >= rank) {
+      // The bin's upper edge, but never above the exact maximum (a p99 above the max reads
+      // as a bug in a report).
+      const double max_us =
+          static_cast<double>(max_ns_.load(std::memory_order_relaxed)) / static_cast<double>(kNanosPerMicro);
+      return std::min(static_cast<double>(i) + 1.0, max_us);
+    }
   }
   // In the overflow: the bins know nothing finer than "beyond the bound", the maximum is exact.
   return static_cast<double>(max_ns_.load(std::memory_order_relaxed)) / static_cast<double>(kNanosPerMicro);

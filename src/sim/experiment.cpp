@@ -12,6 +12,7 @@
 #include <exception>
 #include <fstream>
 #include <mutex>
+#include <sstream>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
@@ -21,6 +22,13 @@ namespace staa {
 namespace {
 
 using Json = nlohmann::ordered_json;
+
+// 0.6 -> "0.6", 1.5 -> "1.5": short numbers for messages.
+std::string shortNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
 
 bool isPaperMap(const std::string& name) { return name == "office" || name == "apartment" || name == "clutter"; }
 
@@ -66,7 +74,21 @@ ExperimentMap loadExperimentMap(const std::string& name_or_path, std::uint64_t s
     m.name = m.map.name.empty() ? std::filesystem::path(name_or_path).stem().string() : m.map.name;
   }
   if (m.map.goals.empty()) {
-    throw MapError(name_or_path + ": the map has no goals (the agents drive between the map's goal locations)");
+    // The agents drive between the map's goal locations: a map without them (an imported ROS
+    // map) gets well-spread reachable ones rather than being refused.
+    try {
+      m.map.goals = placeGoals(m.map, kExperimentGoalPlacement);
+    } catch (const MapError& e) {
+      throw MapError(name_or_path + ": the map has no goals and none can be placed: " + e.what());
+    }
+    m.goals_placed = true;
+    // Refused now rather than when the first run starts, maybe an hour into the experiment.
+    if (m.map.goals.size() < 2) {
+      throw MapError(name_or_path + ": the map has no goals and room for only " + std::to_string(m.map.goals.size()) +
+                     " with " + shortNumber(kExperimentGoalPlacement.clearance_m) + " m clearance, " +
+                     shortNumber(kExperimentGoalPlacement.min_spacing_m) +
+                     " m apart: the agents drive between at least 2 (add goals to the file)");
+    }
   }
   return m;
 }
@@ -78,8 +100,16 @@ void validateExperimentSpec(const ExperimentSpec& spec) {
   if (spec.modes.empty()) fail("no modes");
   if (spec.agents.empty()) fail("no agent counts");
   if (spec.heuristics.empty()) fail("no heuristics");
+  const int most_agents = spec.agents.empty() ? 1 : *std::max_element(spec.agents.begin(), spec.agents.end());
   for (std::size_t i = 0; i < spec.maps.size(); ++i) {
     if (spec.maps[i].map.goals.empty()) fail("map '" + spec.maps[i].name + "' has no goals");
+    // Every agent starts on its own goal location and drives to another one.
+    const std::size_t need = static_cast<std::size_t>(std::max(2, most_agents));
+    if (spec.maps[i].map.goals.size() < need) {
+      fail("map '" + spec.maps[i].name + "' has " + std::to_string(spec.maps[i].map.goals.size()) + " goals, " +
+           std::to_string(need) + " needed for " + std::to_string(most_agents) +
+           (most_agents == 1 ? " agent" : " agents") + " (each starts on its own goal location)");
+    }
     for (std::size_t j = 0; j < i; ++j) {
       if (spec.maps[j].name == spec.maps[i].name) fail("map name '" + spec.maps[i].name + "' appears twice");
     }
@@ -295,6 +325,16 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   Json s;
   s["maps"] = Json::array();
   for (const ExperimentMap& m : spec.maps) s["maps"].push_back(m.name);
+  // Where the goals came from: the map's own, or placed because it had none.
+  s["map_goals"] = Json::array();
+  for (const ExperimentMap& m : spec.maps) {
+    Json g{{"map", m.name}, {"goals", m.map.goals.size()}, {"goals_placed", m.goals_placed}};
+    if (m.goals_placed) {
+      g["clearance_m"] = kExperimentGoalPlacement.clearance_m;
+      g["spacing_m"] = kExperimentGoalPlacement.min_spacing_m;
+    }
+    s["map_goals"].push_back(std::move(g));
+  }
   s["controllers"] = Json::array();
   for (const ControllerKind c : spec.controllers) s["controllers"].push_back(toString(c));
   s["modes"] = Json::array();

@@ -7,6 +7,7 @@
 
 #include "control/control_cycle.hpp"
 #include "control/robot_profile.hpp"
+#include "map/goals.hpp"
 #include "map/polygon_map.hpp"
 #include "planner/heuristic.hpp"
 #include "sim/multi_sim.hpp"
@@ -23,11 +24,17 @@ namespace staa {
 struct ExperimentMap {
   std::string name;  // "office", "apartment", "clutter" or the map file's name
   PolygonMap map;
+  bool goals_placed = false;  // the file had no goals: placeGoals(kExperimentGoalPlacement) made them
 };
 
+// How goals are placed in a map file without any (an imported ROS map): 40 goals, 0.6 m
+// from every obstacle, 1.5 m apart, seed 1 (the same goals whatever the runs' seed).
+inline constexpr GoalPlacement kExperimentGoalPlacement{};
+
 // "office", "apartment" and "clutter" generate the paper's maps (generatePaperMap(name,
-// seed)); anything else is the path of a polygon map file (a user's own building). Throws
-// MapError naming the file and the reason (unreadable, invalid, or without goals).
+// seed)); anything else is the path of a polygon map file (a user's own building). A file
+// without goals gets goals placed (kExperimentGoalPlacement; goals_placed says so). Throws
+// MapError naming the file and the reason (unreadable, invalid, or no free place for goals).
 ExperimentMap loadExperimentMap(const std::string& name_or_path, std::uint64_t seed);
 
 struct ExperimentSpec {

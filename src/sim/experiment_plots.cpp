@@ -19,13 +19,23 @@ namespace fs = std::filesystem;
 // The figure in layout units (1 unit = one bar's width): each panel is a plot box of
 // kPlotH units high, with room for the y ticks on its left, its title above and the agent
 // labels below. Values map into the box per panel (y = score scaled), since the canvas has
-// one scale for both axes.
+// one scale for both axes. Widths that depend on text (tick labels, titles, legend) are
+// estimated from the character count: kCharEm font sizes per character, kBoldCharEm for
+// bold headings (DejaVu Sans bold runs wider), so that nothing overlaps whatever the number
+// of maps and agent counts.
 constexpr double kPxPerUnit = 16.0;
 constexpr double kPlotH = 10.0;
-constexpr double kLeft = 3.0;    // y tick labels
 constexpr double kRight = 1.0;
 constexpr double kBelow = 2.2;   // group labels
-constexpr double kAbove = 1.8;   // panel title
+constexpr double kAbove = 2.2;   // panel title
+constexpr double kCharEm = 0.6;
+constexpr double kBoldCharEm = 0.66;
+constexpr double kTitleFont = 15.0;
+constexpr double kHeadingFont = 12.0;
+constexpr double kTickFont = 10.0;
+constexpr double kLabelFont = 11.0;
+constexpr double kHeadingGapPx = 14.0;  // least space between two panel titles
+constexpr double kMinFigurePx = 480.0;  // below this a long figure title wraps instead
 
 struct Series {
   std::string label;
@@ -96,32 +106,152 @@ std::string capitalized(std::string s) {
   return s;
 }
 
+// Characters as drawn (UTF-8 code points: the em dash of the panel titles is one).
+double glyphs(std::string_view text) {
+  double n = 0.0;
+  for (const char c : text) n += (static_cast<unsigned char>(c) & 0xC0) != 0x80 ? 1.0 : 0.0;
+  return n;
+}
+
+double textWidthPx(std::string_view text, double font_px, double em = kCharEm) { return em * font_px * glyphs(text); }
+
+// Splits `text` into lines of at most `max_px`: at "; " where a line breaks anyway (the
+// title's clauses stay whole), else at spaces (a word longer than a line keeps one of its own).
+std::vector<std::string> wrapText(const std::string& text, double font_px, double em, double max_px) {
+  if (textWidthPx(text, font_px, em) <= max_px) return {text};
+  const std::size_t clause = text.find("; ");
+  if (clause != std::string::npos) {
+    std::vector<std::string> lines = wrapText(text.substr(0, clause + 1), font_px, em, max_px);
+    for (std::string& rest : wrapText(text.substr(clause + 2), font_px, em, max_px)) lines.push_back(std::move(rest));
+    return lines;
+  }
+  std::vector<std::string> lines;
+  std::string line;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find(' ', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(pos, end - pos);
+    std::string candidate = line;
+    if (!candidate.empty()) candidate.push_back(' ');
+    candidate.append(word);
+    if (!line.empty() && textWidthPx(candidate, font_px, em) > max_px) {
+      lines.push_back(line);
+      line = word;
+    } else {
+      line = std::move(candidate);
+    }
+    pos = end + 1;
+  }
+  if (!line.empty() || lines.empty()) lines.push_back(line);
+  return lines;
+}
+
+// One panel's value axis: 0 .. the tallest bar, extended down to a negative score.
+struct Axis {
+  double lo = 0.0;
+  double hi = 1.0;
+  double step = 1.0;
+};
+
+Axis panelAxis(const std::vector<std::vector<Bar>>& panel) {
+  double vmax = 0.0, vmin = 0.0;
+  for (const auto& group : panel) {
+    for (const Bar& b : group) {
+      if (!b.present) continue;
+      vmax = std::max({vmax, b.goals, b.goals - b.collisions});
+      vmin = std::min(vmin, b.goals - b.collisions);
+    }
+  }
+  Axis a;
+  a.step = tickStep(std::max(1.0, vmax - vmin));
+  a.lo = std::floor(vmin / a.step) * a.step;
+  a.hi = std::max(a.lo + a.step, std::ceil(vmax / a.step) * a.step);
+  return a;
+}
+
+std::string groupLabel(int agents) { return std::to_string(agents) + (agents == 1 ? " agent" : " agents"); }
+
+std::string panelTitle(const Figure& f, std::size_t row, std::size_t col) {
+  return capitalized(f.maps[col]) + " \u2014 " + toString(f.modes[row]);
+}
+
 std::string renderFigure(const Figure& f) {
+  const std::size_t n_cols = std::max<std::size_t>(1, f.maps.size());
+  const std::size_t n_rows = std::max<std::size_t>(1, f.modes.size());
   const double groups = static_cast<double>(std::max<std::size_t>(1, f.agents.size()));
   const double n_series = static_cast<double>(f.series.size());
-  // At least 4 units per group, so that the group's label fits under two bars.
-  const double per_group = std::max(n_series + 1.0, 4.0);
-  const double plot_w = groups * per_group + 1.0;
-  const double pitch_x = kLeft + plot_w + kRight;
+  const double cols = static_cast<double>(n_cols);
+  const double rows = static_cast<double>(n_rows);
+
+  std::vector<std::vector<Axis>> axes(f.modes.size(), std::vector<Axis>(f.maps.size()));
+  double tick_px = 0.0;
+  for (std::size_t row = 0; row < f.modes.size(); ++row) {
+    for (std::size_t col = 0; col < f.maps.size(); ++col) {
+      const Axis& a = axes[row][col] = panelAxis(f.bars[row][col]);
+      for (double t = a.lo; t <= a.hi + 1e-9; t += a.step) {
+        tick_px = std::max(tick_px, textWidthPx(svgNumber(t), kTickFont));
+      }
+    }
+  }
+  // Left of each plot box: the tick labels (4 px from the axis) and, in the first column, the
+  // rotated axis label beside them.
+  const double left = (4.0 + tick_px + 6.0 + kLabelFont + 8.0) / kPxPerUnit;
+
+  // Each group fits its bars with a bar's gap and its "N agents" label.
+  double label_px = 0.0;
+  for (const int n : f.agents) label_px = std::max(label_px, textWidthPx(groupLabel(n), kLabelFont));
+  const double min_group = std::max({n_series + 1.0, 4.0, (label_px + 8.0) / kPxPerUnit});
+  double plot_w = groups * min_group + 1.0;
+
+  // Panel titles are centred over their plot box: a pitch of the widest title plus a gap
+  // keeps neighbours apart, and the first and last inside the figure.
+  double heading_px = 0.0;
+  for (std::size_t row = 0; row < f.modes.size(); ++row) {
+    for (std::size_t col = 0; col < f.maps.size(); ++col) {
+      heading_px = std::max(heading_px, textWidthPx(panelTitle(f, row, col), kHeadingFont, kBoldCharEm));
+    }
+  }
+  plot_w = std::max({plot_w, (heading_px + kHeadingGapPx) / kPxPerUnit - left - kRight,
+                     heading_px / kPxPerUnit - 2.0 * kRight + 0.5});
+  double pitch_x = left + plot_w + kRight;
   const double pitch_y = kBelow + kPlotH + kAbove;
-  const double cols = static_cast<double>(std::max<std::size_t>(1, f.maps.size()));
-  const double rows = static_cast<double>(std::max<std::size_t>(1, f.modes.size()));
 
   SvgCanvasOptions options;
   options.px_per_m = kPxPerUnit;
   options.margin_px = 12.0;
-  options.header_px = 28.0;
   options.footer_px = 30.0;
-  // Wide enough for the title and the legend in one line (about 0.6 em per character).
   std::vector<LegendEntry> entries;
   for (const Series& s : f.series) entries.push_back({s.label, svgFill(s.colour), LegendSymbol::kArea});
   entries.push_back({"collisions (subtracted)", svgFill("#111"), LegendSymbol::kArea});
+  // As SvgCanvas::legend lays out a footer row: symbol, label, gap.
   double legend_px = 0.0;
-  for (const LegendEntry& e : entries) legend_px += 38.0 + 7.2 * static_cast<double>(e.label.size());
-  const double title_px = 8.3 * static_cast<double>(f.title.size());
-  const double width = std::max(cols * pitch_x, std::max(legend_px, title_px) / kPxPerUnit);
-  SvgCanvas canvas(Box{{0.0, 0.0}, {width, rows * pitch_y}}, options);
-  canvas.title(f.title, 15.0);
+  for (const LegendEntry& e : entries) legend_px += 38.0 + textWidthPx(e.label, 12.0);
+
+  // The figure is as wide as its panels, its legend or kMinFigurePx, whichever is widest; a
+  // longer title wraps rather than stretching the panels.
+  const double inner_px = std::max({cols * pitch_x * kPxPerUnit, legend_px, kMinFigurePx - 2.0 * options.margin_px});
+  const std::vector<std::string> title = wrapText(f.title, kTitleFont, kBoldCharEm, inner_px);
+  double title_px = 0.0;
+  for (const std::string& line : title) title_px = std::max(title_px, textWidthPx(line, kTitleFont, kBoldCharEm));
+  const double width_px = std::max(inner_px, title_px);
+  if (width_px > cols * pitch_x * kPxPerUnit) {
+    // Spread the panels over the width: wider plot boxes.
+    pitch_x = width_px / kPxPerUnit / cols;
+    plot_w = pitch_x - left - kRight;
+  }
+  // The groups evenly over the plot box (wider than they need when a title widened it).
+  const double per_group = (plot_w - 1.0) / groups;
+  const double line_px = 1.3 * kTitleFont;
+  options.header_px = 8.0 + line_px * static_cast<double>(title.size());
+  SvgCanvas canvas(Box{{0.0, 0.0}, {cols * pitch_x, rows * pitch_y}}, options);
+  SvgStyle title_style;
+  title_style.fill = "#222";
+  title_style.extra = "font-weight=\"bold\"";
+  for (std::size_t k = 0; k < title.size(); ++k) {
+    canvas.textPx({options.margin_px, options.margin_px + kTitleFont + line_px * static_cast<double>(k)}, title[k],
+                  kTitleFont, TextAnchor::kStart, title_style);
+  }
 
   SvgStyle axis = svgStroke("#333", 1.0);
   SvgStyle grid = svgStroke("#ddd", 0.8);
@@ -135,26 +265,14 @@ std::string renderFigure(const Figure& f) {
   for (std::size_t row = 0; row < f.modes.size(); ++row) {
     for (std::size_t col = 0; col < f.maps.size(); ++col) {
       const auto& panel = f.bars[row][col];
-      const double x0 = static_cast<double>(col) * pitch_x + kLeft;
+      const double x0 = static_cast<double>(col) * pitch_x + left;
       const double y0 = (rows - 1.0 - static_cast<double>(row)) * pitch_y + kBelow;
+      const Axis& a = axes[row][col];
+      auto y = [&](double v) { return y0 + (v - a.lo) / (a.hi - a.lo) * kPlotH; };
 
-      // The panel's value range: 0 .. the tallest bar, extended down to a negative score.
-      double vmax = 0.0, vmin = 0.0;
-      for (const auto& group : panel) {
-        for (const Bar& b : group) {
-          if (!b.present) continue;
-          vmax = std::max({vmax, b.goals, b.goals - b.collisions});
-          vmin = std::min(vmin, b.goals - b.collisions);
-        }
-      }
-      const double step = tickStep(std::max(1.0, vmax - vmin));
-      const double lo = std::floor(vmin / step) * step;
-      const double hi = std::max(lo + step, std::ceil(vmax / step) * step);
-      auto y = [&](double v) { return y0 + (v - lo) / (hi - lo) * kPlotH; };
-
-      for (double t = lo; t <= hi + 1e-9; t += step) {
+      for (double t = a.lo; t <= a.hi + 1e-9; t += a.step) {
         canvas.line({x0, y(t)}, {x0 + plot_w, y(t)}, grid);
-        canvas.text({x0, y(t)}, svgNumber(t), 10.0, TextAnchor::kEnd, label, -4.0, 3.5);
+        canvas.text({x0, y(t)}, svgNumber(t), kTickFont, TextAnchor::kEnd, label, -4.0, 3.5);
       }
 
       for (std::size_t g = 0; g < panel.size(); ++g) {
@@ -176,19 +294,19 @@ std::string renderFigure(const Figure& f) {
             canvas.rect(Box{{bx + inset, y(score)}, {bx + 1.0 - inset, y(b.goals)}}, black);
           }
         }
-        const int n = f.agents[g];
-        canvas.text({gx + 0.5 * n_series, y0}, std::to_string(n) + (n == 1 ? " agent" : " agents"),
-                    11.0, TextAnchor::kMiddle, label, 0.0, 16.0);
+        canvas.text({gx + 0.5 * n_series, y0}, groupLabel(f.agents[g]), kLabelFont, TextAnchor::kMiddle, label, 0.0,
+                    16.0);
       }
       canvas.line({x0, y(0.0)}, {x0 + plot_w, y(0.0)}, axis);
       canvas.line({x0, y0}, {x0, y0 + kPlotH}, axis);
-      canvas.text({x0 + 0.5 * plot_w, y0 + kPlotH}, capitalized(f.maps[col]) + " \u2014 " + toString(f.modes[row]),
-                  12.0, TextAnchor::kMiddle, heading, 0.0, -9.0);
+      canvas.text({x0 + 0.5 * plot_w, y0 + kPlotH}, panelTitle(f, row, col), kHeadingFont, TextAnchor::kMiddle,
+                  heading, 0.0, -12.0);
       if (col == 0) {
-        const Vec2 p = canvas.toPixel({x0 - kLeft, y0 + 0.5 * kPlotH}) + Vec2{10.0, 0.0};
+        // Beside the tick labels, clear of the longest one.
+        const Vec2 p = canvas.toPixel({x0, y0 + 0.5 * kPlotH}) - Vec2{4.0 + tick_px + 6.0 + 0.2 * kLabelFont, 0.0};
         SvgStyle rotated = label;
         rotated.extra = "transform=\"rotate(-90 " + svgNumber(p.x()) + " " + svgNumber(p.y()) + ")\"";
-        canvas.textPx(p, "score (mean)", 11.0, TextAnchor::kMiddle, rotated);
+        canvas.textPx(p, "score (mean)", kLabelFont, TextAnchor::kMiddle, rotated);
       }
     }
   }

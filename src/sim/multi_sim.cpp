@@ -254,6 +254,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   std::vector<PolygonView> views(n);
   std::vector<Vec2> velocities(n);
   std::vector<AgentCommand> commands(n);
+  std::vector<Vec2> current_goals(options.on_step_goals ? n : 0);
 
   MultiSimResult result;
   const double period = 1.0 / options.rate_hz;
@@ -308,6 +309,10 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       }
     }
     if (options.on_step) options.on_step(world);
+    if (options.on_step_goals) {
+      for (std::size_t i = 0; i < n; ++i) current_goals[i] = agents[i]->goal;
+      options.on_step_goals(world, current_goals, k);
+    }
     const int second = static_cast<int>(std::floor(world.time() + 1e-9));
     if (second > last_second) {
       last_second = second;

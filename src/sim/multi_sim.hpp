@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,9 @@ struct MultiSimOptions {
   std::vector<std::vector<Vec2>> goal_sequences;
   // Called after every simulation step with the world (tests, drawing); may be empty.
   std::function<void(const MultiWorld& world)> on_step;
+  // As on_step, with the goal each agent drives to now (one per agent; an agent with nowhere
+  // left to go keeps its last goal) and the cycle index (0 for the first step); may be empty.
+  std::function<void(const MultiWorld& world, std::span<const Vec2> current_goals, int cycle)> on_step_goals;
 };
 
 struct AgentResult {

@@ -1,11 +1,13 @@
 // staa-map: map tools (ARCHITECTURE.md section 6). Import a ROS occupancy map, generate the
-// paper's maps, describe a map, plan a shortest path, draw a map as SVG.
+// paper's maps, place goal locations in a map without them, describe a map, plan a shortest
+// path, draw a map as SVG.
 // Exit status: 0 on a valid answer (including "no path"), 2 on bad input, with one line on
 // stderr naming the value and where it came from.
 
 #include "geometry/clipper_ops.hpp"
 #include "geometry/polygon.hpp"
 #include "map/generate.hpp"
+#include "map/goals.hpp"
 #include "map/polygon_map.hpp"
 #include "map/ros_import.hpp"
 #include "path/global_path.hpp"
@@ -70,6 +72,15 @@ double parsePositive(const std::string& option, const std::string& text, std::st
     throw InputError(option + ": expected " + std::string(what) + " (a finite number > 0), got '" + text + "'");
   }
   return *v;
+}
+
+int parseCount(const std::string& option, const std::string& text, int min, int max, std::string_view what) {
+  const auto v = staa::cli::parseUnsigned(text);
+  if (!v || *v < static_cast<std::uint64_t>(min) || *v > static_cast<std::uint64_t>(max)) {
+    throw InputError(option + ": expected " + std::string(what) + " (an integer from " + std::to_string(min) + " to " +
+                     std::to_string(max) + "), got '" + text + "'");
+  }
+  return static_cast<int>(*v);
 }
 
 std::uint64_t parseSeed(const std::string& option, const std::string& text) {
@@ -201,20 +212,71 @@ int runInfo(const std::string& map_file, bool json) {
   return 0;
 }
 
-// ---- import, generate ----
+// ---- import, generate, goals ----
 
-int runImport(const std::string& ros_yaml, const std::string& out_file, const std::string& simplify_text) {
+// Goals for a map (replacing any it has); a map without room for them is bad input, named by
+// the file it came from.
+void placeGoalsInto(PolygonMap& map, const std::string& source, const staa::GoalPlacement& placement) {
+  try {
+    map.goals = staa::placeGoals(map, placement);
+  } catch (const staa::MapError& e) {
+    throw InputError(source + ": " + e.what());
+  }
+}
+
+// "placed 40 goals (clearance 0.6 m, spacing 1.5 m)", saying so when fewer fit than asked.
+std::string placedText(const PolygonMap& map, const staa::GoalPlacement& placement) {
+  const auto placed = static_cast<int>(map.goals.size());
+  std::string s = "placed " + std::to_string(placed);
+  if (placed < placement.count) s += " of " + std::to_string(placement.count);
+  s += placed == 1 ? " goal" : " goals";
+  s += " (clearance " + fmt(placement.clearance_m, 2) + " m, spacing " + fmt(placement.min_spacing_m, 2) +
+       " m, seed " + std::to_string(placement.seed) + ")";
+  if (placed < placement.count) s += "; no more fit that far apart";
+  return s;
+}
+
+int runImport(const std::string& ros_yaml, const std::string& out_file, const std::string& simplify_text,
+              const std::string& goals_text, const std::string& clearance_text) {
   staa::ImportOptions options;
   options.simplify_m = parseNonNegative("--simplify", simplify_text, "a tolerance in metres");
+  staa::GoalPlacement placement;
+  placement.count = parseCount("--goals", goals_text, 0, 100000, "a number of goals to place");
+  if (!clearance_text.empty()) {
+    placement.clearance_m = parseNonNegative("--goal-clearance", clearance_text, "a clearance in metres");
+    if (placement.count == 0) {
+      throw InputError("--goal-clearance " + clearance_text + " places nothing without --goals N (N > 0)");
+    }
+  }
   std::cout << "importing " << ros_yaml << " (simplify " << fmt(options.simplify_m, 3) << " m) ..." << std::endl;
   const auto t0 = Clock::now();
-  const PolygonMap map = staa::importRosMap(ros_yaml, options);
+  PolygonMap map = staa::importRosMap(ros_yaml, options);
   const double ms = microsecondsSince(t0) / 1000.0;
+  if (placement.count > 0) placeGoalsInto(map, ros_yaml, placement);
   staa::savePolygonMap(map, out_file);
   std::size_t vertices = 0;
   for (const auto& p : map.obstacles) vertices += p.size();
   std::cout << "imported " << map.name << ": " << map.obstacles.size() << " polygons, " << vertices
-            << " vertices in " << fmt(ms, 1) << " ms -> " << out_file << '\n';
+            << " vertices in " << fmt(ms, 1) << " ms";
+  if (placement.count > 0) std::cout << "; " << placedText(map, placement);
+  std::cout << " -> " << out_file << '\n';
+  return 0;
+}
+
+int runGoals(const std::string& map_file, const std::string& out_file, const std::string& count_text,
+             const std::string& clearance_text, const std::string& spacing_text, const std::string& seed_text) {
+  staa::GoalPlacement placement;
+  placement.count = parseCount("--count", count_text, 1, 100000, "a number of goals");
+  placement.clearance_m = parseNonNegative("--clearance", clearance_text, "a clearance in metres");
+  placement.min_spacing_m = parsePositive("--spacing", spacing_text, "a distance in metres");
+  placement.seed = parseSeed("--seed", seed_text);
+  PolygonMap map = staa::loadPolygonMap(map_file);
+  const std::size_t replaced = map.goals.size();
+  placeGoalsInto(map, map_file, placement);
+  staa::savePolygonMap(map, out_file);
+  std::cout << placedText(map, placement) << " in " << (map.name.empty() ? map_file : map.name);
+  if (replaced > 0) std::cout << ", replacing " << replaced;
+  std::cout << " -> " << out_file << '\n';
   return 0;
 }
 
@@ -347,7 +409,9 @@ int run(int argc, char** argv) {
   app.set_help_all_flag("--help-all", "Print the help of every subcommand");
 
   std::string map_file, out_file, from_text, to_text, inflate_text = "0.3", simplify_text = "0.05",
-                                                     seed_text = "1", scale_text, name;
+                                                     seed_text = "1", scale_text, name, goals_text = "0",
+                                                     goal_clearance_text, count_text = "40", clearance_text = "0.6",
+                                                     spacing_text = "1.5";
   bool json = false;
 
   auto* info = app.add_subcommand("info", "Describe a polygon map: name, bounds, polygon and vertex counts, "
@@ -361,12 +425,30 @@ int run(int argc, char** argv) {
   import->add_option("-o,--output", out_file, "Polygon map to write")->required();
   import->add_option("--simplify", simplify_text, "Douglas-Peucker tolerance in metres (0: every pixel corner)")
       ->capture_default_str();
+  import->add_option("--goals", goals_text, "Goal locations to place in the map (0: none; see the goals "
+                                            "subcommand)")
+      ->capture_default_str();
+  import->add_option("--goal-clearance", goal_clearance_text,
+                     "Clearance of the goals from obstacles and bounds in metres (default 0.6)");
 
   auto* generate = app.add_subcommand("generate", "Write one of the paper's maps: office, apartment, clutter "
                                                   "(clutter is random from --seed).");
   generate->add_option("NAME", name, "office, apartment or clutter")->required();
   generate->add_option("--seed", seed_text, "Seed of the clutter map (non-negative integer)")->capture_default_str();
   generate->add_option("-o,--output", out_file, "Polygon map to write")->required();
+
+  auto* goals = app.add_subcommand(
+      "goals", "Place goal locations in a polygon map (replacing any): lattice points with --clearance to every "
+               "obstacle and the bounds, in the largest connected free region (so every goal is reachable from "
+               "every other), spread by farthest-point sampling from a seeded first goal, at least --spacing "
+               "apart. Fewer than --count when no more fit.");
+  goals->add_option("MAP", map_file, "Polygon map")->required();
+  goals->add_option("-o,--output", out_file, "Polygon map to write (may be MAP itself)")->required();
+  goals->add_option("--count", count_text, "Number of goals")->capture_default_str();
+  goals->add_option("--clearance", clearance_text, "Distance from every obstacle and the bounds in metres")
+      ->capture_default_str();
+  goals->add_option("--spacing", spacing_text, "Least distance between two goals in metres")->capture_default_str();
+  goals->add_option("--seed", seed_text, "Seed of the first goal (non-negative integer)")->capture_default_str();
 
   auto* path = app.add_subcommand("path", "Plan the shortest path between two points in the map inflated by "
                                           "--inflate. Exit status 0 also when no path exists (status says why).");
@@ -395,7 +477,7 @@ int run(int argc, char** argv) {
     bool known = false;
     for (const auto* sub : app.get_subcommands({})) known = known || sub->check_name(first);
     if (!known) {
-      throw InputError("unknown subcommand '" + first + "' (expected info, import, generate, path or svg)");
+      throw InputError("unknown subcommand '" + first + "' (expected info, import, generate, goals, path or svg)");
     }
   }
 
@@ -409,8 +491,9 @@ int run(int argc, char** argv) {
   }
 
   if (*info) return runInfo(map_file, json);
-  if (*import) return runImport(map_file, out_file, simplify_text);
+  if (*import) return runImport(map_file, out_file, simplify_text, goals_text, goal_clearance_text);
   if (*generate) return runGenerate(name, seed_text, out_file);
+  if (*goals) return runGoals(map_file, out_file, count_text, clearance_text, spacing_text, seed_text);
   if (*path) return runPath(map_file, from_text, to_text, inflate_text, json);
   if (*svg) return runSvg(map_file, out_file, from_text, to_text, inflate_text, scale_text);
   return kExitBadInput;

@@ -1,7 +1,8 @@
 // staa-sim: the simulator (ARCHITECTURE.md section 6). Runs the real control cycle against a
-// simulated world: one robot from a start to a goal in a polygon map (--map/--start/--goal) or
-// in a scenario among scripted movers (--scenario). Multi-agent runs and `experiment` come in
-// later issues; their options are accepted only where the value means one robot.
+// simulated world: one robot from a start to a goal in a polygon map (--map/--start/--goal), a
+// scenario among scripted movers (--scenario), several agents driving between random goals
+// of a map (--agents N > 1 or --mode ghost: the paper's Sec. IV-B, one run), or the whole
+// experiment (`staa-sim experiment`).
 // Exit status: 0 on a completed run (reached or not), 2 on bad input with one line on stderr
 // naming the option or file and the value, 1 on an unexpected failure during the run.
 
@@ -11,10 +12,15 @@
 #include "geometry/polygon.hpp"
 #include "map/polygon_map.hpp"
 #include "planner/heuristic.hpp"
+#include "sim/experiment.hpp"
 #include "sim/footprint.hpp"
+#include "sim/multi_sim.hpp"
+#include "sim/multi_world.hpp"
 #include "sim/scenario.hpp"
 #include "sim/sim_runner.hpp"
 #include "sim/world.hpp"
+#include "viz/map_drawing.hpp"
+#include "viz/svg.hpp"
 
 #include "app/cli_support.hpp"
 #include "app/staa-sim/experiment_command.hpp"
@@ -24,16 +30,19 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <iostream>
 #include <limits>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -229,25 +238,38 @@ std::string summary(const staa::SimResult& r) {
   return s.str();
 }
 
+// Opened before the run: a bad --json path fails before a long run, not after it.
+void openJsonOutput(const std::string& file, std::ofstream& out) {
+  if (file.empty()) return;
+  // Create the folder it goes into, as --svg does for its own.
+  const std::filesystem::path parent = std::filesystem::path(file).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+  out.open(file, std::ios::binary | std::ios::trunc);
+  if (!out) throw InputError("--json: cannot write '" + file + "'");
+}
+
+void writeJsonOutput(const std::string& file, std::ofstream& out, const Json& j) {
+  if (!out.is_open()) return;
+  out << j.dump(2) << '\n';
+  out.close();
+  if (!out) throw InputError("--json: cannot write '" + file + "'");
+}
+
+void makeSvgDir(const fs::path& dir) {
+  if (dir.empty()) return;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    throw InputError("--svg: cannot create the directory '" + dir.string() + "'" +
+                     (ec ? " (" + ec.message() + ")" : std::string()));
+  }
+}
+
 int simulate(Request& rq) {
-  // Open the output first: a bad --json path fails before a long run, not after it.
   std::ofstream json_out;
-  if (!rq.json_file.empty()) {
-    // Create the folder it goes into, as --svg does for its own.
-    const std::filesystem::path parent = std::filesystem::path(rq.json_file).parent_path();
-    std::error_code ec;
-    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-    json_out.open(rq.json_file, std::ios::binary | std::ios::trunc);
-    if (!json_out) throw InputError("--json: cannot write '" + rq.json_file + "'");
-  }
-  if (!rq.options.svg_dir.empty()) {
-    std::error_code ec;
-    fs::create_directories(rq.options.svg_dir, ec);
-    if (ec || !fs::is_directory(rq.options.svg_dir)) {
-      throw InputError("--svg: cannot create the directory '" + rq.options.svg_dir.string() + "'" +
-                       (ec ? " (" + ec.message() + ")" : std::string()));
-    }
-  }
+  openJsonOutput(rq.json_file, json_out);
+  makeSvgDir(rq.options.svg_dir);
 
   if (!rq.quiet) {
     const auto& o = rq.options;
@@ -285,13 +307,321 @@ int simulate(Request& rq) {
     return kExitRunFailed;
   }
 
-  if (json_out.is_open()) {
-    json_out << resultJson(rq, result).dump(2) << '\n';
-    json_out.close();
-    if (!json_out) throw InputError("--json: cannot write '" + rq.json_file + "'");
-  }
+  writeJsonOutput(rq.json_file, json_out, resultJson(rq, result));
   std::cout << summary(result) << '\n';
   return 0;
+}
+
+// ---- multi-agent runs (--agents N > 1 or --mode ghost) ----
+
+struct MultiRequest {
+  staa::PolygonMap map;
+  std::string map_label;       // the map file as given
+  bool goals_placed = false;   // the file had no goals: placed for the run
+  staa::RobotProfile robot;
+  std::string controller;
+  std::string mode;
+  std::uint64_t seed = 1;
+  staa::HeuristicKind heuristic = staa::HeuristicKind::kPathRtr;
+  staa::MultiSimOptions options;
+  std::string json_file;
+  fs::path svg_dir;
+  int svg_every = 15;
+  bool quiet = false;
+};
+
+// The agents whose results count (the contract's score): all in cooperative mode, the
+// observed agent 0 in ghost mode.
+bool counted(const MultiRequest& rq, std::size_t agent) {
+  return rq.options.mode == staa::SimMode::kCooperative || agent == 0;
+}
+
+// min_clearance_m for several agents: the smallest distance between a counted agent's
+// footprint and an obstacle, the bounds or another agent (ghosts included: they count as
+// contacts of the observed agent), over the states after every step.
+class ClearanceTracker {
+ public:
+  explicit ClearanceTracker(const staa::PolygonMap& map) : map_(map) {
+    for (const staa::Polygon& p : map.obstacles) boxes_.push_back(staa::boundingBox(p));
+  }
+
+  void update(const staa::MultiWorld& world, const MultiRequest& rq) {
+    for (std::size_t i = 0; i < world.size(); ++i) {
+      if (counted(rq, i)) best_ = std::min(best_, clearance(world, i));
+    }
+  }
+  double value() const { return best_; }
+
+ private:
+  // Only what lies nearer than the best so far can lower it: boxes prune the rest.
+  double clearance(const staa::MultiWorld& world, std::size_t i) const {
+    const staa::Polygon& body = world.footprint(i);
+    double best = best_;
+    if (map_.bounds) {
+      const staa::Box& b = *map_.bounds;
+      for (const Vec2& p : body) {
+        best = std::min({best, p.x() - b.min.x(), b.max.x() - p.x(), p.y() - b.min.y(), b.max.y() - p.y()});
+      }
+      if (best <= 0.0) return 0.0;
+    }
+    const staa::Box box = staa::boundingBox(body);
+    for (std::size_t k = 0; k < boxes_.size(); ++k) {
+      if (staa::boxDistance(box, boxes_[k]) >= best) continue;
+      best = std::min(best, staa::polygonDistance(body, map_.obstacles[k]));
+      if (best <= 0.0) return 0.0;
+    }
+    for (std::size_t j = 0; j < world.size(); ++j) {
+      if (j == i) continue;
+      const staa::Polygon& other = world.footprint(j);
+      if (staa::boxDistance(box, staa::boundingBox(other)) >= best) continue;
+      best = std::min(best, staa::polygonDistance(body, other));
+      if (best <= 0.0) return 0.0;
+    }
+    return best;
+  }
+
+  const staa::PolygonMap& map_;
+  std::vector<staa::Box> boxes_;
+  double best_ = std::numeric_limits<double>::infinity();
+};
+
+// Solid agents each in their own colour (goal, trail and body agree); ghosts grey.
+constexpr const char* kAgentColours[] = {"#1971c2", "#e8590c", "#2f9e44", "#c2255c", "#0c8599", "#e67700", "#5f3dc4"};
+constexpr const char* kGhostColour = "#868e96";
+constexpr const char* kContactColour = "#e03131";
+constexpr double kTrailSeconds = 10.0;
+
+const char* agentColour(const staa::MultiWorld& world, std::size_t i) {
+  return world.body(i) == staa::AgentBody::kGhost ? kGhostColour : kAgentColours[i % std::size(kAgentColours)];
+}
+
+// One frame of a multi-agent run: the whole map with its goals, every agent's trail, its
+// current goal (ring and dashed line), its footprint (red outline while in contact) and
+// heading, and the running score.
+void writeMultiFrame(const fs::path& file, const MultiRequest& rq, const staa::MultiWorld& world,
+                     std::span<const Vec2> goals, const std::vector<std::deque<Vec2>>& trails, int goals_reached,
+                     int collisions) {
+  staa::SvgCanvasOptions opt;
+  opt.px_per_m = staa::autoScale(staa::mapDrawingBox(rq.map), 800.0);
+  opt.margin_px = 16.0;
+  opt.header_px = 22.0;
+  opt.footer_px = 30.0;
+  opt.side_panel_px = 190.0;
+  staa::SvgCanvas canvas(staa::mapDrawingBox(rq.map), opt);
+  staa::drawMap(canvas, rq.map, nullptr);
+
+  const std::size_t n = world.size();
+  canvas.beginGroup(staa::SvgStyle{}, true);
+  for (std::size_t i = 0; i < n && i < trails.size(); ++i) {
+    const std::vector<Vec2> trail(trails[i].begin(), trails[i].end());
+    staa::SvgStyle line = staa::svgStroke(agentColour(world, i), 1.6);
+    line.opacity = 0.7;
+    line.extra = "stroke-linejoin=\"round\"";
+    canvas.polyline(trail, line);
+  }
+  for (std::size_t i = 0; i < n && i < goals.size(); ++i) {
+    const char* colour = agentColour(world, i);
+    canvas.line(world.agent(i).pose.position(), goals[i], staa::svgStroke(colour, 1.0, "4 3"));
+    canvas.marker(goals[i], 10.0, staa::svgStroke(colour, 2.5));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool ghost = world.body(i) == staa::AgentBody::kGhost;
+    staa::SvgStyle body = staa::svgFill(agentColour(world, i), ghost ? 0.45 : 0.9);
+    body.stroke = world.inContact(i) ? kContactColour : "#212529";
+    body.stroke_width_px = world.inContact(i) ? 2.5 : 1.0;
+    if (ghost) body.dash = "3 2";
+    canvas.polygon(world.footprint(i), body);
+    canvas.arrow(world.agent(i).pose, 0.45, staa::svgStroke("#ffffff", 1.5), 5.0);
+    staa::SvgStyle label;
+    label.fill = "#212529";
+    label.extra = "font-weight=\"bold\"";
+    canvas.text(world.agent(i).pose.position(), std::to_string(i), 10.0, staa::TextAnchor::kMiddle, label, 0.0, -12.0);
+  }
+  canvas.endGroup();
+
+  char caption[200];
+  std::snprintf(caption, sizeof caption, "%s: t = %.2f s, %zu %s (%s, %s): goals %d, collisions %d",
+                rq.map.name.c_str(), world.time(), n, n == 1 ? "agent" : "agents", rq.mode.c_str(),
+                rq.controller.c_str(), goals_reached, collisions);
+  canvas.title(caption);
+  canvas.scaleBar();
+  const bool ghost_mode = rq.options.mode == staa::SimMode::kGhost;
+  std::vector<staa::LegendEntry> legend = staa::mapLegend(false, true, false);
+  legend.push_back({ghost_mode ? "observed agent" : "agent", staa::svgFill(kAgentColours[0], 0.9),
+                    staa::LegendSymbol::kArea});
+  if (ghost_mode && n > 1) {
+    legend.push_back({"ghost agent", staa::svgFill(kGhostColour, 0.45), staa::LegendSymbol::kArea});
+  }
+  legend.push_back({"current goal", staa::svgStroke(kAgentColours[0], 2.5), staa::LegendSymbol::kMarker});
+  legend.push_back({"trail (last 10 s)", staa::svgStroke(kAgentColours[0], 1.6), staa::LegendSymbol::kLine});
+  legend.push_back({"in contact", staa::svgStroke(kContactColour, 2.5), staa::LegendSymbol::kLine});
+  canvas.legend(legend);
+  canvas.save(file);
+}
+
+Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, double min_clearance, int frames) {
+  const auto& o = rq.options;
+  Json j;
+  j["map"] = rq.map_label;
+  j["scenario"] = nullptr;
+  j["robot"] = rq.robot.name;
+  j["controller"] = rq.controller;
+  j["mode"] = rq.mode;
+  j["seed"] = rq.seed;
+  j["rate_hz"] = o.rate_hz;
+  j["duration_s"] = o.duration_s;
+  j["budget"] = o.budget_expansions ? Json{{"kind", "expansions"}, {"value", *o.budget_expansions}}
+                                    : Json{{"kind", "wall_ms"}, {"value", o.budget_ms}};
+  j["heuristic"] = staa::toString(rq.heuristic);
+  // The agents start on goal locations and drive to random ones: no single start or goal.
+  j["start"] = nullptr;
+  j["goal"] = nullptr;
+  j["movers"] = 0;
+  j["map_goals"] = rq.map.goals.size();
+  j["goals_placed"] = rq.goals_placed;
+
+  // Of the observed agent in ghost mode, summed over the agents in cooperative mode.
+  j["goals_reached"] = r.goals_reached;
+  j["collisions"] = r.collisions;
+  j["score"] = r.score;
+  // Only defined for one robot driving to one goal (--start/--goal or --scenario).
+  j["reached_goal"] = nullptr;
+  j["time_to_goal_s"] = nullptr;
+  // Infinite only for a lone agent in an unbounded, empty world: JSON has no infinity.
+  j["min_clearance_m"] = std::isfinite(min_clearance) ? Json(min_clearance) : Json(nullptr);
+
+  Json planner;
+  planner["calls"] = r.calls;
+  planner["expansions"] = distributionJson(r.expansions, true, false);
+  planner["successors"] = distributionJson(r.successors, true, false);
+  planner["finished_early_ratio"] = r.finished_early_ratio;
+  planner["depth_mean"] = r.depth_mean;
+  planner["plan_us"] = distributionJson(r.plan_us, false, true);
+  j["planner"] = std::move(planner);
+  j["simulated_s"] = r.duration_s;
+  j["frames_written"] = frames;
+  Json agents = Json::array();
+  for (std::size_t i = 0; i < r.agents.size(); ++i) {
+    const staa::AgentResult& a = r.agents[i];
+    agents.push_back(Json{{"goals_reached", a.goals_reached},
+                          {"collisions", a.collisions},
+                          {"distance_m", a.distance_m},
+                          {"ghost", o.mode == staa::SimMode::kGhost && i > 0}});
+  }
+  j["agents"] = std::move(agents);
+  return j;
+}
+
+std::string multiSummary(const MultiRequest& rq, const staa::MultiSimResult& r, double min_clearance, int frames) {
+  std::ostringstream s;
+  s << r.agents.size() << (r.agents.size() == 1 ? " agent, " : " agents, ") << rq.mode << ", " << rq.controller
+    << ", " << fmt(r.duration_s) << " s: score " << r.score << " (goals " << r.goals_reached << ", collisions "
+    << r.collisions << (rq.options.mode == staa::SimMode::kGhost ? ", observed agent 0" : "") << "); per agent goals ";
+  for (std::size_t i = 0; i < r.agents.size(); ++i) s << (i ? "/" : "") << r.agents[i].goals_reached;
+  s << ", collisions ";
+  for (std::size_t i = 0; i < r.agents.size(); ++i) s << (i ? "/" : "") << r.agents[i].collisions;
+  s << "; min clearance " << (std::isfinite(min_clearance) ? fmt(min_clearance, 3) + " m" : std::string("inf"));
+  if (r.calls > 0) {
+    s << "; planner " << r.calls << " calls, pops mean " << fmt(r.expansions.mean, 1) << ", plan p50 "
+      << fmt(r.plan_us.p50 * 1e-3, 3) << " ms p99 " << fmt(r.plan_us.p99 * 1e-3, 3) << " ms";
+  }
+  if (frames > 0) s << "; " << frames << " frames";
+  return s.str();
+}
+
+int simulateMulti(MultiRequest& rq) {
+  std::ofstream json_out;
+  openJsonOutput(rq.json_file, json_out);
+  makeSvgDir(rq.svg_dir);
+
+  auto& o = rq.options;
+  if (!rq.quiet) {
+    std::cerr << "staa-sim: " << rq.map.name << ": " << o.agents << (o.agents == 1 ? " agent, " : " agents, ")
+              << rq.mode << ", " << rq.controller << " (" << staa::toString(rq.heuristic) << ", "
+              << (o.budget_expansions ? std::to_string(*o.budget_expansions) + " expansions"
+                                      : fmt(o.budget_ms, 2) + " ms")
+              << " per cycle), " << rq.map.goals.size() << " goal locations, seed " << rq.seed << ", "
+              << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
+  }
+
+  // Per step, outside the simulated cycle: clearance, progress (a goal reached shows as a new
+  // current goal), trails and frames.
+  ClearanceTracker clearance(rq.map);
+  std::vector<Vec2> last_goals;
+  std::vector<int> reached(static_cast<std::size_t>(o.agents), 0);
+  std::vector<std::deque<Vec2>> trails(rq.svg_dir.empty() ? 0 : static_cast<std::size_t>(o.agents));
+  const auto trail_points = static_cast<std::size_t>(std::ceil(kTrailSeconds * o.rate_hz)) + 1;
+  int frames = 0;
+  long last_second = 0;
+  o.on_step_goals = [&](const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle) {
+    clearance.update(world, rq);
+    if (last_goals.empty()) last_goals.assign(goals.begin(), goals.end());
+    int goals_now = 0, collisions_now = 0;
+    for (std::size_t i = 0; i < goals.size(); ++i) {
+      if (goals[i] != last_goals[i]) ++reached[i];
+      last_goals[i] = goals[i];
+      if (counted(rq, i)) {
+        goals_now += reached[i];
+        collisions_now += world.collisionEpisodes(i);
+      }
+    }
+    for (std::size_t i = 0; i < trails.size(); ++i) {
+      trails[i].push_back(world.agent(i).pose.position());
+      if (trails[i].size() > trail_points) trails[i].pop_front();
+    }
+    if (!rq.svg_dir.empty() && cycle % rq.svg_every == 0) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05d.svg", cycle);
+      writeMultiFrame(rq.svg_dir / name, rq, world, goals, trails, goals_now, collisions_now);
+      ++frames;
+    }
+    const long second = static_cast<long>(std::floor(world.time() + 1e-9));
+    if (!rq.quiet && second > last_second) {
+      last_second = second;
+      std::fprintf(stderr, "t=%.1fs goals=%d collisions=%d agent0=(%.2f,%.2f)\n", world.time(), goals_now,
+                   collisions_now, world.agent(0).pose.x, world.agent(0).pose.y);
+    }
+  };
+
+  staa::MultiSimResult result;
+  try {
+    result = staa::runMultiAgent(rq.map, rq.robot, o);
+  } catch (const std::exception& e) {
+    std::cerr << "staa-sim: the run failed: " << e.what() << '\n';
+    return kExitRunFailed;
+  }
+  writeJsonOutput(rq.json_file, json_out, multiResultJson(rq, result, clearance.value(), frames));
+  std::cout << multiSummary(rq, result, clearance.value(), frames) << '\n';
+  return 0;
+}
+
+// Loads --map for a multi-agent run: the agents start on distinct goal locations and drive
+// between them, so a map without goals gets them placed as the experiment places them.
+void loadMultiMap(MultiRequest& rq, const std::string& map_file, const std::string& agents_text) {
+  rq.map = staa::loadPolygonMap(map_file);
+  rq.map_label = map_file;
+  if (rq.map.name.empty()) rq.map.name = fs::path(map_file).stem().string();
+  if (rq.map.goals.empty()) {
+    try {
+      rq.map.goals = staa::placeGoals(rq.map, staa::kExperimentGoalPlacement);
+    } catch (const staa::MapError& e) {
+      throw InputError("--map " + map_file + ": the map has no goals and none can be placed: " + e.what());
+    }
+    rq.goals_placed = true;
+    // Said even with --quiet: the agents drive to goals the map file does not have.
+    std::cerr << "staa-sim: " << map_file << " has no goals: placed " << rq.map.goals.size() << " (clearance "
+              << fmt(staa::kExperimentGoalPlacement.clearance_m, 1) << " m, spacing "
+              << fmt(staa::kExperimentGoalPlacement.min_spacing_m, 1) << " m)\n";
+  }
+  const std::size_t goals = rq.map.goals.size();
+  if (goals < 2) {
+    throw InputError("--map " + map_file + ": a multi-agent run needs at least 2 goal locations, the map has " +
+                     std::to_string(goals));
+  }
+  if (goals < static_cast<std::size_t>(rq.options.agents)) {
+    throw InputError("--agents " + agents_text + ": the map " + map_file + " has only " + std::to_string(goals) +
+                     " goal locations (each agent starts on its own)");
+  }
 }
 
 // ---- command line ----
@@ -317,11 +647,17 @@ int run(int argc, char** argv) {
                                         "scenario's profile)");
   app.add_option("--controller", controller, "staa, dwa (predictive dynamic window) or pd (carrot + force field)")
       ->capture_default_str();
-  app.add_option("--mode", mode, "cooperative or ghost (with one agent both are the same)")->capture_default_str();
-  app.add_option("--agents", agents_text, "Number of agents (only 1 is available yet)")->capture_default_str();
+  app.add_option("--mode", mode, "cooperative (every agent runs --controller and avoids the others) or ghost "
+                               "(agent 0 runs --controller, the others drive through everything); ghost, or "
+                               "--agents > 1, makes a multi-agent run")
+      ->capture_default_str();
+  app.add_option("--agents", agents_text, "Number of agents; more than 1 makes a multi-agent run: the agents "
+                                          "drive between random goals of --map (no --start/--goal/--scenario)")
+      ->capture_default_str();
   app.add_option("--duration", duration_text, "Simulated seconds")->capture_default_str();
   app.add_option("--rate", rate_text, "Control rate in Hz")->capture_default_str();
-  app.add_option("--seed", seed_text, "Seed (recorded in the JSON; single-robot runs are deterministic)")
+  app.add_option("--seed", seed_text, "Seed of a multi-agent run's starts and goals (recorded in the JSON; "
+                                      "single-robot runs are deterministic)")
       ->capture_default_str();
   app.add_option("--budget-ms", budget_ms_text, "Wall-clock STAA* budget per cycle in ms (default 19 ms at 30 Hz, "
                                                 "scaled with the rate)");
@@ -329,7 +665,8 @@ int run(int argc, char** argv) {
                  "STAA* budget per cycle in queue pops: a bit-for-bit reproducible run");
   app.add_option("--heuristic", heuristic_text, "path-rtr, path-euclid or dijkstra-rtr")->capture_default_str();
   app.add_option("--json", json_file, "Write the results as JSON to this file");
-  app.add_option("--svg", svg_dir, "Write frames (frame_NNNNN.svg) like the paper's Fig. 1 into this directory");
+  app.add_option("--svg", svg_dir, "Write frames (frame_NNNNN.svg) into this directory: like the paper's Fig. 1 "
+                                   "for one robot, the whole map with every agent for a multi-agent run");
   app.add_option("--svg-every", svg_every_text, "Cycles between frames")->capture_default_str();
   app.add_flag("--quiet", quiet, "No progress on stderr (the summary line on stdout remains)");
 
@@ -355,11 +692,7 @@ int run(int argc, char** argv) {
   }
   rq.mode = mode;
   rq.agents = static_cast<int>(parseCount("--agents", agents_text, 1, 1000, "a number of agents"));
-  if (rq.agents != 1) {
-    throw InputError("--agents: " + agents_text +
-                     " agents are not available yet: only a single robot (--agents 1) runs now; multi-agent "
-                     "simulation comes in a later issue");
-  }
+  const bool multi = rq.agents > 1 || mode == "ghost";
   if (!staa::parseHeuristicKind(heuristic_text.c_str(), rq.heuristic)) {
     throw InputError("--heuristic: expected path-rtr, path-euclid or dijkstra-rtr, got '" + heuristic_text + "'");
   }
@@ -388,6 +721,43 @@ int run(int argc, char** argv) {
   o.control.rate_hz = o.rate_hz;
   o.control.staa.heuristic.kind = rq.heuristic;
   rq.json_file = json_file;
+
+  if (multi) {
+    std::string why = rq.agents > 1 ? "--agents " : "--mode ghost";
+    if (rq.agents > 1) why.append(agents_text);
+    for (const auto& [name, text] : {std::pair<const char*, const std::string&>{"--scenario", scenario_file},
+                                     {"--start", start_text},
+                                     {"--goal", goal_text}}) {
+      if (!text.empty()) {
+        throw InputError(std::string(name) + " '" + text + "' cannot be combined with " + why +
+                         ": in a multi-agent run every agent drives to random goals of --map (--start, --goal "
+                         "and --scenario are for a single robot)");
+      }
+    }
+    if (map_file.empty()) throw InputError("--map is required with " + why + " (the agents drive between its goals)");
+    MultiRequest mr;
+    mr.quiet = quiet;
+    mr.controller = rq.controller;
+    mr.mode = rq.mode;
+    mr.seed = rq.seed;
+    mr.heuristic = rq.heuristic;
+    mr.json_file = json_file;
+    mr.svg_dir = svg_dir;
+    mr.svg_every = o.svg_every;
+    staa::MultiSimOptions& m = mr.options;
+    m.agents = rq.agents;
+    staa::parseSimMode(mode, m.mode);
+    staa::parseControllerKind(controller, m.controller);
+    m.duration_s = o.duration_s;
+    m.rate_hz = o.rate_hz;
+    m.budget_expansions = o.budget_expansions;
+    m.budget_ms = o.budget_ms;
+    m.seed = rq.seed;
+    m.control = o.control;
+    mr.robot = robot_file.empty() ? staa::paperAgentProfile() : staa::loadRobotProfile(robot_file);
+    loadMultiMap(mr, map_file, agents_text);
+    return simulateMulti(mr);
+  }
 
   if (!scenario_file.empty()) {
     for (const auto& [name, text] : {std::pair<const char*, const std::string&>{"--map", map_file},

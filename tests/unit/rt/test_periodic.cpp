@@ -51,13 +51,13 @@ TEST(PeriodicLoop, NormalCyclesWakeExactlyOnEveryDeadline) {
   EXPECT_EQ(wake.count, 100u);
   EXPECT_EQ(wake.max_us, 0.0);
   EXPECT_EQ(wake.mean_us, 0.0);
-  EXPECT_EQ(wake.p99_us, 1.0);  // bin [0, 1) us: reported by its upper edge
+  EXPECT_EQ(wake.p99_us, 0.0);  // bin [0, 1) us: its upper edge capped at the exact max 0
   const TimingSummary exec = loop.execution().summary();
   EXPECT_EQ(exec.count, 100u);
   EXPECT_EQ(exec.overflow, 0u);
   EXPECT_EQ(exec.max_us, 3000.0);
   EXPECT_EQ(exec.mean_us, 3000.0);
-  EXPECT_EQ(exec.p50_us, 3001.0);  // bin [3000, 3001) us
+  EXPECT_EQ(exec.p50_us, 3000.0);  // bin [3000, 3001) us, capped at the exact max
 }
 
 TEST(PeriodicLoop, ExecutionOverrunSkipsMissedPeriodsWithoutBurst) {
@@ -104,7 +104,7 @@ TEST(PeriodicLoop, ExecutionOverrunSkipsMissedPeriodsWithoutBurst) {
   EXPECT_EQ(exec.count, 16u);
   EXPECT_EQ(exec.max_us, 25000.0);
   EXPECT_EQ(exec.p50_us, 5001.0);
-  EXPECT_EQ(loop.execution().percentileUs(100.0), 25001.0);
+  EXPECT_EQ(loop.execution().percentileUs(100.0), 25000.0);
   EXPECT_EQ(loop.wakeLatency().summary().count, 16u);
 }
 
@@ -148,7 +148,7 @@ TEST(PeriodicLoop, LateWakeupOverrunIsAttributedToThePlatform) {
   EXPECT_EQ(s.mean_us, 3250.0);
   EXPECT_EQ(s.p50_us, 1.0);
   EXPECT_EQ(wake.percentileUs(75.0), 5001.0);
-  EXPECT_EQ(s.p99_us, 8001.0);
+  EXPECT_EQ(s.p99_us, 8000.0);
 }
 
 TEST(PeriodicLoop, EndingExactlyOnTheNextDeadlineIsNoOverrun) {

@@ -10,15 +10,15 @@ namespace {
 
 constexpr Nanos kMicro = 1000;
 
-TEST(LatencyHistogram, PercentilesOfKnownSamplesAreBinUpperEdges) {
+TEST(LatencyHistogram, PercentilesOfKnownSamplesAreBinUpperEdgesCappedAtTheMax) {
   LatencyHistogram h(1000);
   for (Nanos us = 1; us <= 100; ++us) h.record(us * kMicro);  // 1, 2, ..., 100 us
   // Nearest rank: p50 is the 50th sample (50 us, bin [50, 51) us), reported as 51.
   EXPECT_EQ(h.percentileUs(50.0), 51.0);
   EXPECT_EQ(h.percentileUs(99.0), 100.0);
-  EXPECT_EQ(h.percentileUs(100.0), 101.0);
-  EXPECT_EQ(h.percentileUs(0.0), 2.0);     // the smallest sample
-  EXPECT_EQ(h.percentileUs(150.0), 101.0); // clamped to 100
+  EXPECT_EQ(h.percentileUs(100.0), 100.0);  // bin edge 101, capped at the exact max 100
+  EXPECT_EQ(h.percentileUs(0.0), 2.0);      // the smallest sample
+  EXPECT_EQ(h.percentileUs(150.0), 100.0);  // clamped to 100
   EXPECT_EQ(h.percentileUs(-3.0), 2.0);    // clamped to 0
 
   const TimingSummary s = h.summary();
@@ -37,7 +37,7 @@ TEST(LatencyHistogram, SubMicrosecondDetailKeepsExactMaxAndMean) {
   h.record(2500);  // bin [2, 3) us
   const TimingSummary s = h.summary();
   EXPECT_EQ(s.p50_us, 2.0);
-  EXPECT_EQ(s.p99_us, 3.0);
+  EXPECT_EQ(s.p99_us, 2.5);  // bin edge 3, capped at the exact max
   EXPECT_EQ(s.max_us, 2.5);
   EXPECT_DOUBLE_EQ(s.mean_us, 2.0);
 }
@@ -64,7 +64,7 @@ TEST(LatencyHistogram, NegativeDurationsCountAsZero) {
   EXPECT_EQ(s.count, 1u);
   EXPECT_EQ(s.max_us, 0.0);
   EXPECT_EQ(s.mean_us, 0.0);
-  EXPECT_EQ(s.p50_us, 1.0);
+  EXPECT_EQ(s.p50_us, 0.0);  // bin edge 1 us, capped at the max
 }
 
 TEST(LatencyHistogram, EmptyAndResetReadAsZero) {
@@ -87,7 +87,7 @@ TEST(LatencyHistogram, EmptyAndResetReadAsZero) {
   h.record(7 * kMicro);  // usable again after the reset
   s = h.summary();
   EXPECT_EQ(s.count, 1u);
-  EXPECT_EQ(s.p50_us, 8.0);
+  EXPECT_EQ(s.p50_us, 7.0);  // bin edge 8, capped at the max 7
   EXPECT_EQ(s.max_us, 7.0);
 }
 

@@ -13,6 +13,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -241,6 +243,136 @@ TEST(ExperimentPlots, NegativeScoreDrawsItsBarBelowZeroAndTheCollisionsOverIt) {
   EXPECT_NEAR(black[0] / score[0], 5.0 / 3.0, 0.01);  // collisions 5 over a score of -3
 }
 
+// ---- the layout: no text over another, for narrow and wide figures ----
+
+// A text's box estimated from its <text> element as the layout estimates it: 0.6 font sizes
+// per character, from 0.75 font sizes above the baseline to 0.25 below; a rotate(-90) about
+// the text's own position turns it upright.
+struct TextBox {
+  std::string text;
+  double x0 = 0.0, x1 = 0.0, y0 = 0.0, y1 = 0.0;
+};
+
+double attribute(const std::string& attrs, const std::string& name, double fallback) {
+  const std::regex re("(^|\\s)" + name + "=\"(-?[0-9.]+)\"");
+  std::smatch m;
+  return std::regex_search(attrs, m, re) ? std::stod(m[2].str()) : fallback;
+}
+
+std::vector<TextBox> textBoxes(const std::string& svg) {
+  std::vector<TextBox> boxes;
+  const std::regex element("<text([^>]*)>([^<]*)</text>");
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), element); it != std::sregex_iterator(); ++it) {
+    const std::string attrs = (*it)[1].str();
+    TextBox b;
+    b.text = (*it)[2].str();
+    // Characters as drawn: an entity (&amp;) or a UTF-8 sequence (the em dash) is one.
+    double chars = 0.0;
+    for (std::size_t k = 0; k < b.text.size(); ++k) {
+      const auto c = static_cast<unsigned char>(b.text[k]);
+      if (c == '&') k = b.text.find(';', k);
+      chars += (c & 0xC0) != 0x80 ? 1.0 : 0.0;
+    }
+    const double x = attribute(attrs, "x", 0.0), y = attribute(attrs, "y", 0.0);
+    const double font = attribute(attrs, "font-size", 11.0);
+    const double w = 0.6 * font * chars;
+    const double along = attrs.find("text-anchor=\"middle\"") != std::string::npos ? 0.5
+                         : attrs.find("text-anchor=\"end\"") != std::string::npos ? 1.0
+                                                                                   : 0.0;
+    if (attrs.find("rotate(-90") != std::string::npos) {
+      b.x0 = x - 0.75 * font;
+      b.x1 = x + 0.25 * font;
+      b.y0 = y - (1.0 - along) * w;
+      b.y1 = y + along * w;
+    } else {
+      b.x0 = x - along * w;
+      b.x1 = b.x0 + w;
+      b.y0 = y - 0.75 * font;
+      b.y1 = y + 0.25 * font;
+    }
+    boxes.push_back(b);
+  }
+  return boxes;
+}
+
+bool overlap(const TextBox& a, const TextBox& b) { return a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1; }
+
+double svgSize(const std::string& svg, const std::string& name) {
+  std::smatch m;
+  const std::regex re("<svg[^>]* " + name + "=\"([0-9.]+)\"");
+  return std::regex_search(svg, m, re) ? std::stod(m[1].str()) : 0.0;
+}
+
+// Every text inside the figure and clear of every other one.
+void expectNoTextOverlaps(const std::string& svg, const std::string& what) {
+  const std::vector<TextBox> boxes = textBoxes(svg);
+  const double width = svgSize(svg, "width"), height = svgSize(svg, "height");
+  ASSERT_GT(boxes.size(), 5U) << what;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const TextBox& a = boxes[i];
+    EXPECT_GE(a.x0, 0.0) << what << ": '" << a.text << "' leaves the figure on the left";
+    EXPECT_LE(a.x1, width) << what << ": '" << a.text << "' leaves the figure on the right";
+    EXPECT_GE(a.y0, 0.0) << what << ": '" << a.text << "' leaves the figure at the top";
+    EXPECT_LE(a.y1, height) << what << ": '" << a.text << "' leaves the figure at the bottom";
+    for (std::size_t j = 0; j < i; ++j) {
+      EXPECT_FALSE(overlap(a, boxes[j])) << what << ": '" << a.text << "' overlaps '" << boxes[j].text << "'";
+    }
+  }
+}
+
+const std::vector<std::string> kSixMaps{"office", "apartment", "clutter", "depot", "warehouse", "tb3_sandbox"};
+
+// Every controller in every mode on the first `maps` maps with these agent counts; varied
+// values, some large and some negative, so the tick labels vary in width.
+std::vector<ExperimentCell> matrixCells(std::size_t maps, const std::vector<int>& agents) {
+  std::vector<ExperimentCell> cells;
+  double v = 3.0;
+  for (std::size_t m = 0; m < maps; ++m) {
+    for (const SimMode mode : {SimMode::kCooperative, SimMode::kGhost}) {
+      for (const int a : agents) {
+        for (const ControllerKind c : {ControllerKind::kPd, ControllerKind::kDwa, ControllerKind::kStaa}) {
+          v = std::fmod(v * 7.3 + 11.0, 180.0);
+          cells.push_back(cell(kSixMaps[m].c_str(), c, mode, a, v, std::fmod(v * 3.1, 60.0)));
+          cells.push_back(cell(kSixMaps[m].c_str(), ControllerKind::kStaa, mode, a, v / 2.0, 1.0,
+                               HeuristicKind::kDijkstraRtr));
+        }
+      }
+    }
+  }
+  return cells;
+}
+
+TEST(ExperimentPlots, PanelTitlesOfFourMapsWithOneAgentCountDoNotOverlap) {
+  // The narrowest panels: one group of three bars each.
+  const std::string svg = controllerScoresSvg(matrixCells(4, {1}), HeuristicKind::kPathRtr);
+  std::vector<TextBox> titles;
+  for (const TextBox& b : textBoxes(svg)) {
+    if (b.text.find("\u2014") != std::string::npos) titles.push_back(b);
+  }
+  ASSERT_EQ(titles.size(), 8U);  // 4 maps x 2 modes
+  const double width = svgSize(svg, "width");
+  for (std::size_t i = 0; i < titles.size(); ++i) {
+    EXPECT_GE(titles[i].x0, 0.0) << titles[i].text;
+    EXPECT_LE(titles[i].x1, width) << titles[i].text;
+    for (std::size_t j = 0; j < i; ++j) {
+      EXPECT_FALSE(overlap(titles[i], titles[j])) << "'" << titles[i].text << "' [" << titles[i].x0 << ", "
+                                                  << titles[i].x1 << "] overlaps '" << titles[j].text << "' ["
+                                                  << titles[j].x0 << ", " << titles[j].x1 << "]";
+    }
+  }
+}
+
+TEST(ExperimentPlots, NoTextOverlapsAnotherForOneToSixMapsAndOneToThreeAgentCounts) {
+  for (std::size_t maps = 1; maps <= kSixMaps.size(); ++maps) {
+    for (const std::vector<int>& agents : {std::vector<int>{1}, std::vector<int>{1, 3}, std::vector<int>{1, 3, 5}}) {
+      const std::vector<ExperimentCell> cells = matrixCells(maps, agents);
+      const std::string what = std::to_string(maps) + " maps, " + std::to_string(agents.size()) + " agent counts";
+      expectNoTextOverlaps(controllerScoresSvg(cells, HeuristicKind::kPathRtr), "controllers, " + what);
+      expectNoTextOverlaps(heuristicScoresSvg(cells), "heuristics, " + what);
+    }
+  }
+}
+
 TEST(ExperimentSummary, MeanAndSampleStddevPerCell) {
   std::vector<ExperimentRun> runs(3);
   const int goals[] = {4, 6, 8};
@@ -260,17 +392,46 @@ TEST(ExperimentSummary, MeanAndSampleStddevPerCell) {
   EXPECT_NEAR(cells[0].score.mean, 17.0 / 3.0, 1e-12);
 }
 
-TEST(ExperimentMaps, AcceptsAUsersMapFileWithGoalsAndRejectsOneWithout) {
+TEST(ExperimentMaps, AcceptsAUsersMapFileWithGoalsAndPlacesGoalsInOneWithout) {
   const fs::path dir = freshDir("maps");
   std::ofstream(dir / "depot.yaml") << "format: staa-polygon-map/1\nname: depot\nbounds: [0, 0, 10, 10]\n"
                                        "obstacles:\n  - [[4, 4], [6, 4], [6, 6], [4, 6]]\n"
                                        "goals:\n  - [1, 1]\n  - [9, 9]\n";
   std::ofstream(dir / "nogoals.yaml") << "format: staa-polygon-map/1\nname: empty\nbounds: [0, 0, 10, 10]\n"
                                          "obstacles: []\n";
+  // Bounds narrower than twice the goals' clearance: nowhere to place one.
+  std::ofstream(dir / "narrow.yaml") << "format: staa-polygon-map/1\nname: narrow\nbounds: [0, 0, 1, 10]\n"
+                                        "obstacles: []\n";
   const ExperimentMap m = loadExperimentMap((dir / "depot.yaml").string(), 1);
   EXPECT_EQ(m.name, "depot");
   EXPECT_EQ(m.map.goals.size(), 2U);
-  EXPECT_THROW(loadExperimentMap((dir / "nogoals.yaml").string(), 1), MapError);
+  EXPECT_FALSE(m.goals_placed);
+
+  const ExperimentMap placed = loadExperimentMap((dir / "nogoals.yaml").string(), 1);
+  EXPECT_TRUE(placed.goals_placed);
+  // The free 8.8 x 8.8 m square holds fewer than 40 goals 1.5 m apart: as many as fit.
+  EXPECT_GE(placed.map.goals.size(), 20U);
+  EXPECT_LE(placed.map.goals.size(), 40U);
+  for (const Vec2& g : placed.map.goals) {
+    EXPECT_GE(std::min({g.x(), g.y(), 10.0 - g.x(), 10.0 - g.y()}), 0.6 - 1e-9) << g.transpose();
+  }
+  ExperimentSpec spec;
+  spec.maps = {m, placed};
+  const Json doc = Json::parse(experimentJson(spec, {}));
+  ASSERT_EQ(doc["spec"]["map_goals"].size(), 2U);
+  EXPECT_EQ(doc["spec"]["map_goals"][0]["goals_placed"], false);
+  EXPECT_EQ(doc["spec"]["map_goals"][1]["map"], "empty");
+  EXPECT_EQ(doc["spec"]["map_goals"][1]["goals_placed"], true);
+  EXPECT_EQ(doc["spec"]["map_goals"][1]["goals"], placed.map.goals.size());
+  EXPECT_EQ(doc["spec"]["maps"], Json::array({"depot", "empty"}));
+
+  try {
+    loadExperimentMap((dir / "narrow.yaml").string(), 1);
+    ADD_FAILURE() << "no error for a map without room for goals";
+  } catch (const MapError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("narrow.yaml"));
+    EXPECT_THAT(e.what(), HasSubstr("no goals"));
+  }
   try {
     loadExperimentMap("offfice", 1);
     ADD_FAILURE() << "no error for an unknown map";
@@ -311,6 +472,23 @@ TEST(StaaSimExperiment, SmallExperimentExitsZeroWithResultsAndFigure) {
   EXPECT_THAT(e.out, HasSubstr("clutter"));
   EXPECT_THAT(e.out, HasSubstr("score"));
   EXPECT_THAT(e.err, HasSubstr("[2/2]"));
+  fs::remove_all(dir);
+}
+
+TEST(StaaSimExperiment, MapFileWithoutGoalsGetsGoalsPlacedWithANote) {
+  const fs::path dir = freshDir("nogoals");
+  std::ofstream(dir / "hall.yaml") << "format: staa-polygon-map/1\nname: hall\nbounds: [0, 0, 16, 10]\n"
+                                      "obstacles:\n  - [[7, 4], [9, 4], [9, 6], [7, 6]]\n";
+  const Exit e = runSim("experiment --maps '" + (dir / "hall.yaml").string() +
+                            "' --controllers pd --modes cooperative --agents 2 --runs 1 --duration 2 --jobs 1 "
+                            "--quiet --out '" + (dir / "out").string() + "'",
+                        dir);
+  ASSERT_EQ(e.code, 0) << e.err;
+  EXPECT_THAT(e.err, HasSubstr("hall.yaml has no goals: placed 40 (clearance 0.6 m, spacing 1.5 m)"));
+  const Json doc = Json::parse(readFile(dir / "out" / "results.json"));
+  ASSERT_EQ(doc["spec"]["map_goals"].size(), 1U);
+  EXPECT_EQ(doc["spec"]["map_goals"][0]["goals_placed"], true);
+  EXPECT_EQ(doc["runs"].size(), 1U);
   fs::remove_all(dir);
 }
 

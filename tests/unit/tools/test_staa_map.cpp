@@ -11,6 +11,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -258,7 +259,7 @@ TEST_F(StaaMapTool, UnknownMapNameAndSubcommandAreRejected) {
 }
 
 TEST_F(StaaMapTool, EverySubcommandHasHelp) {
-  for (const std::string sub : {"info", "import", "generate", "path", "svg"}) {
+  for (const std::string sub : {"info", "import", "generate", "goals", "path", "svg"}) {
     const RunResult r = run({sub, "--help"});
     EXPECT_EQ(r.exit_code, 0) << sub;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << r.out;
@@ -344,6 +345,127 @@ TEST_F(StaaMapTool, ImportsATinyRosMapIntoALoadableMap) {
   const RunResult bad = run({"import", path("tiny.yaml").string(), "-o", out.string(), "--simplify", "-0.1"});
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--simplify"), std::string::npos) << bad.err;
+}
+
+// A 10 x 8 m hall at 0.05 m/px: a 2-px black border and a 1 x 1 m black pillar in the middle.
+void writeHallRosMap(const fs::path& dir) {
+  const int w = 200, h = 160;
+  std::string pixels(static_cast<std::size_t>(w * h), static_cast<char>(254));
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const bool border = r < 2 || c < 2 || r >= h - 2 || c >= w - 2;
+      const bool pillar = r >= 70 && r < 90 && c >= 90 && c < 110;
+      if (border || pillar) pixels[static_cast<std::size_t>(r * w + c)] = 0;
+    }
+  }
+  std::ofstream(dir / "hall.pgm", std::ios::binary) << "P5\n" << w << ' ' << h << "\n255\n" << pixels;
+  std::ofstream(dir / "hall.yaml") << "image: hall.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\n"
+                                      "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+}
+
+TEST_F(StaaMapTool, ImportWithGoalsWritesThatManyGoalsWithTheirClearance) {
+  writeHallRosMap(dir_);
+  const fs::path out = path("hall-polygons.yaml");
+  const RunResult r = run({"import", path("hall.yaml").string(), "-o", out.string(), "--goals", "20"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("placed 20 goals (clearance 0.60 m, spacing 1.50 m, seed 1)"), std::string::npos) << r.out;
+  const PolygonMap map = loadPolygonMap(out);
+  ASSERT_EQ(map.goals.size(), 20U);
+  for (const Vec2& g : map.goals) {
+    // Off the 0.1 m border walls and the pillar [4.5, 5.5] x [3.5, 4.5] by 0.6 m.
+    EXPECT_GE(std::min({g.x() - 0.1, 9.9 - g.x(), g.y() - 0.1, 7.9 - g.y()}), 0.6 - 1e-6) << g.transpose();
+    const double dx = std::max({4.5 - g.x(), 0.0, g.x() - 5.5}), dy = std::max({3.5 - g.y(), 0.0, g.y() - 4.5});
+    EXPECT_GE(std::hypot(dx, dy), 0.6 - 1e-6) << g.transpose();
+  }
+
+  // A larger clearance: fewer places, each at least that far from the walls.
+  const RunResult wide = run({"import", path("hall.yaml").string(), "-o", out.string(), "--goals", "20",
+                              "--goal-clearance", "1.5"});
+  ASSERT_EQ(wide.exit_code, 0) << wide.err;
+  for (const Vec2& g : loadPolygonMap(out).goals) {
+    EXPECT_GE(std::min({g.x() - 0.1, 9.9 - g.x(), g.y() - 0.1, 7.9 - g.y()}), 1.5 - 1e-6) << g.transpose();
+  }
+
+  // No room at all: bad input naming the file.
+  const RunResult none = run({"import", path("hall.yaml").string(), "-o", path("none.yaml").string(), "--goals", "5",
+                              "--goal-clearance", "4.5"});
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find(path("hall.yaml").string()), std::string::npos) << none.err;
+  EXPECT_NE(none.err.find("no free place"), std::string::npos) << none.err;
+  EXPECT_FALSE(fs::exists(path("none.yaml")));
+
+  struct Bad {
+    std::vector<std::string> extra;
+    std::string option, value;
+  };
+  for (const Bad& b : std::vector<Bad>{{{"--goals", "x"}, "--goals", "'x'"},
+                                       {{"--goals", "-3"}, "--goals", "'-3'"},
+                                       {{"--goals", "5", "--goal-clearance", "-1"}, "--goal-clearance", "'-1'"},
+                                       {{"--goal-clearance", "0.5"}, "--goal-clearance", "--goals"}}) {
+    std::vector<std::string> args{"import", path("hall.yaml").string(), "-o", path("bad.yaml").string()};
+    args.insert(args.end(), b.extra.begin(), b.extra.end());
+    const RunResult e = run(args);
+    EXPECT_EQ(e.exit_code, 2) << b.extra[0] << " " << b.extra[1];
+    EXPECT_NE(e.err.find(b.option), std::string::npos) << e.err;
+    EXPECT_NE(e.err.find(b.value), std::string::npos) << e.err;
+    EXPECT_FALSE(fs::exists(path("bad.yaml")));
+  }
+}
+
+TEST_F(StaaMapTool, GoalsSubcommandReplacesTheGoalsOfAMap) {
+  const fs::path out = path("office-goals.yaml");
+  const RunResult r = run({"goals", office().string(), "-o", out.string(), "--count", "30"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("placed 30 goals"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("replacing 43"), std::string::npos) << r.out;
+  const PolygonMap placed = loadPolygonMap(out);
+  const PolygonMap original = loadPolygonMap(office());
+  ASSERT_EQ(placed.goals.size(), 30U);
+  EXPECT_EQ(placed.obstacles.size(), original.obstacles.size());  // only the goals change
+  EXPECT_NE(placed.goals, std::vector<Vec2>(original.goals.begin(), original.goals.begin() + 30));
+  for (std::size_t i = 0; i < placed.goals.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) EXPECT_GE((placed.goals[i] - placed.goals[j]).norm(), 1.5 - 1e-9);
+  }
+
+  // The seed picks the first goal: the same seed the same file, another seed other goals.
+  ASSERT_EQ(run({"goals", office().string(), "-o", path("s1.yaml").string(), "--count", "30"}).exit_code, 0);
+  ASSERT_EQ(run({"goals", office().string(), "-o", path("s2.yaml").string(), "--count", "30", "--seed", "2"}).exit_code,
+            0);
+  EXPECT_EQ(readFile(out), readFile(path("s1.yaml")));
+  EXPECT_NE(readFile(out), readFile(path("s2.yaml")));
+
+  // More than fit gives fewer, said on stdout.
+  const RunResult few = run({"goals", office().string(), "-o", out.string(), "--count", "500", "--spacing", "3"});
+  ASSERT_EQ(few.exit_code, 0) << few.err;
+  EXPECT_NE(few.out.find(" of 500 goals"), std::string::npos) << few.out;
+  EXPECT_LT(loadPolygonMap(out).goals.size(), 500U);
+
+  struct Bad {
+    std::vector<std::string> extra;
+    std::string option, value;
+  };
+  for (const Bad& b : std::vector<Bad>{{{"--count", "0"}, "--count", "'0'"},
+                                       {{"--count", "many"}, "--count", "'many'"},
+                                       {{"--clearance", "abc"}, "--clearance", "'abc'"},
+                                       {{"--clearance", "-0.5"}, "--clearance", "'-0.5'"},
+                                       {{"--spacing", "0"}, "--spacing", "'0'"},
+                                       {{"--seed", "1.5"}, "--seed", "'1.5'"}}) {
+    std::vector<std::string> args{"goals", office().string(), "-o", path("bad.yaml").string()};
+    args.insert(args.end(), b.extra.begin(), b.extra.end());
+    const RunResult e = run(args);
+    EXPECT_EQ(e.exit_code, 2) << b.extra[0] << " " << b.extra[1];
+    EXPECT_NE(e.err.find(b.option), std::string::npos) << e.err;
+    EXPECT_NE(e.err.find(b.value), std::string::npos) << e.err;
+    EXPECT_FALSE(fs::exists(path("bad.yaml")));
+  }
+
+  // A map with no free place: exit 2 naming the file.
+  const fs::path tight = path("tight.yaml");
+  std::ofstream(tight) << "format: staa-polygon-map/1\nname: tight\nbounds: [0, 0, 1, 1]\nobstacles: []\n";
+  const RunResult none = run({"goals", tight.string(), "-o", path("bad.yaml").string()});
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find(tight.string()), std::string::npos) << none.err;
+  EXPECT_NE(none.err.find("'tight'"), std::string::npos) << none.err;
 }
 
 TEST_F(StaaMapTool, ImportsTheDepotAndPlansAcrossIt) {

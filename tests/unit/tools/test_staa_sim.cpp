@@ -2,6 +2,8 @@
 // the test writes, its exit status, stdout, stderr and the files it writes.
 
 #include "control/robot_profile.hpp"
+#include "map/generate.hpp"
+#include "map/polygon_map.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -11,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -257,7 +260,14 @@ TEST_F(StaaSim, BadInputExitsTwoNamingTheValue) {
       {with(ok_goal, {"--budget-ms", "5", "--budget-expansions", "10"}), "--budget-ms 5 and --budget-expansions 10"},
       {with(ok_goal, {"--heuristic", "foo"}), "'foo'"},
       {with(ok_goal, {"--controller", "mpc"}), "expected staa, dwa or pd, got 'mpc'"},
-      {with(ok_goal, {"--agents", "3"}), "--agents: 3"},
+      {with(ok_goal, {"--agents", "3"}), "--start '1,1,0' cannot be combined with --agents 3"},
+      {{"--map", "map.yaml", "--agents", "0"},
+       "--agents: expected a number of agents (an integer from 1 to 1000), got '0'"},
+      {{"--scenario", "scenario.yaml", "--agents", "2"},
+       "--scenario 'scenario.yaml' cannot be combined with --agents 2"},
+      {{"--map", "map.yaml", "--mode", "ghost", "--goal", "9,9,0"},
+       "--goal '9,9,0' cannot be combined with --mode ghost"},
+      {{"--agents", "3"}, "--map is required with --agents 3"},
       {{"--map", "missing.yaml", "--start", "1,1,0", "--goal", "9,9,1.57"}, "missing.yaml"},
       {{"--map", "map.yaml", "--start", "5,5,0", "--goal", "9,9,1.57"}, "--start (5.00, 5.00, 0.00)"},
       {{"--map", "map.yaml", "--start", "1,1,0", "--goal", "5,5,0"}, "--goal (5.00, 5.00, 0.00)"},
@@ -274,6 +284,129 @@ TEST_F(StaaSim, BadInputExitsTwoNamingTheValue) {
     EXPECT_EQ(r.out, "") << line;
   }
   EXPECT_FALSE(fs::exists(dir_ / "out.json"));
+}
+
+// ---- multi-agent runs (--agents N > 1 or --mode ghost) ----
+
+// The generated office (43 goals) as a map file in the test's directory.
+void writeOffice(const fs::path& dir) { savePolygonMap(generatePaperMap("office", 1), dir / "office.yaml"); }
+
+const std::vector<std::string> kOfficeRun{"--map", "office.yaml", "--duration", "5", "--budget-expansions", "200",
+                                          "--quiet"};
+
+// The contract's keys (ARCHITECTURE.md section 6), present in a multi-agent run too; the
+// single-robot ones are null there.
+void expectContractKeys(const Json& j) {
+  for (const char* key : {"goals_reached", "collisions", "score"}) {
+    ASSERT_TRUE(j.contains(key)) << key;
+    EXPECT_TRUE(j[key].is_number_integer()) << key;
+  }
+  for (const char* key : {"reached_goal", "time_to_goal_s", "min_clearance_m"}) ASSERT_TRUE(j.contains(key)) << key;
+  EXPECT_TRUE(j["reached_goal"].is_null());
+  EXPECT_TRUE(j["time_to_goal_s"].is_null());
+  ASSERT_TRUE(j.contains("planner") && j["planner"].is_object());
+  const Json& p = j["planner"];
+  ASSERT_TRUE(p.contains("calls") && p["calls"].is_number_integer());
+  expectDistribution(p, "expansions", {"mean", "p50", "p99"});
+  expectDistribution(p, "successors", {"mean", "p50", "p99"});
+  expectDistribution(p, "plan_us", {"p50", "p99", "max"});
+  ASSERT_TRUE(p.contains("finished_early_ratio") && p["finished_early_ratio"].is_number());
+  ASSERT_TRUE(p.contains("depth_mean") && p["depth_mean"].is_number());
+}
+
+TEST_F(StaaSim, CooperativeAgentsOnTheOfficeReportEveryAgentAndTheirSummedScore) {
+  writeOffice(dir_);
+  const SimRun r = sim(with(kOfficeRun, {"--agents", "3", "--mode", "cooperative", "--json", "out.json"}));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json j = json("out.json");
+  expectContractKeys(j);
+  EXPECT_EQ(j["mode"], "cooperative");
+  EXPECT_EQ(j["map_goals"], 43);
+  EXPECT_FALSE(j["goals_placed"].get<bool>());
+  ASSERT_TRUE(j["agents"].is_array());
+  ASSERT_EQ(j["agents"].size(), 3U);
+  int goals = 0, collisions = 0;
+  for (const Json& a : j["agents"]) {
+    for (const char* key : {"goals_reached", "collisions"}) EXPECT_TRUE(a[key].is_number_integer()) << key;
+    EXPECT_GT(a["distance_m"].get<double>(), 0.5);  // every agent drove
+    EXPECT_FALSE(a["ghost"].get<bool>());
+    goals += a["goals_reached"].get<int>();
+    collisions += a["collisions"].get<int>();
+  }
+  // Cooperative: summed over the agents.
+  EXPECT_EQ(j["goals_reached"], goals);
+  EXPECT_EQ(j["collisions"], collisions);
+  EXPECT_EQ(j["score"].get<int>(), j["goals_reached"].get<int>() - j["collisions"].get<int>());
+  EXPECT_GE(j["min_clearance_m"].get<double>(), 0.0);
+  // STAA* ran for every agent every cycle, within the budget.
+  EXPECT_EQ(j["planner"]["calls"], 3 * 150);
+  EXPECT_LE(j["planner"]["expansions"]["p99"].get<double>(), 200.0);
+  EXPECT_NEAR(j["simulated_s"].get<double>(), 5.0, 1e-6);
+  EXPECT_THAT(r.out, HasSubstr("score " + std::to_string(j["score"].get<int>())));
+  EXPECT_THAT(r.out, HasSubstr("per agent goals "));
+}
+
+TEST_F(StaaSim, GhostModeCountsTheObservedAgentOnlyAndPlacesGoalsInAMapWithout) {
+  // map.yaml (12 x 12 m, one box) has no goals: placed as the experiment places them.
+  const SimRun r = sim({"--map", "map.yaml", "--agents", "3", "--mode", "ghost", "--duration", "3",
+                        "--budget-expansions", "200", "--controller", "dwa", "--json", "out.json", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("map.yaml has no goals: placed "));
+  EXPECT_THAT(r.err, HasSubstr("(clearance 0.6 m, spacing 1.5 m)"));
+  const Json j = json("out.json");
+  expectContractKeys(j);
+  EXPECT_TRUE(j["goals_placed"].get<bool>());
+  EXPECT_GE(j["map_goals"].get<int>(), 3);
+  EXPECT_EQ(j["mode"], "ghost");
+  EXPECT_EQ(j["controller"], "dwa");
+  ASSERT_EQ(j["agents"].size(), 3U);
+  EXPECT_FALSE(j["agents"][0]["ghost"].get<bool>());
+  EXPECT_TRUE(j["agents"][1]["ghost"].get<bool>());
+  EXPECT_TRUE(j["agents"][2]["ghost"].get<bool>());
+  // Ghost: the observed agent's goals and collisions alone.
+  EXPECT_EQ(j["goals_reached"], j["agents"][0]["goals_reached"]);
+  EXPECT_EQ(j["collisions"], j["agents"][0]["collisions"]);
+  EXPECT_EQ(j["score"].get<int>(), j["goals_reached"].get<int>() - j["collisions"].get<int>());
+  EXPECT_EQ(j["planner"]["calls"], 0);  // DWA: no STAA* calls
+  EXPECT_THAT(r.out, HasSubstr("observed agent 0"));
+}
+
+TEST_F(StaaSim, SameSeedGivesTheSameMultiAgentRun) {
+  writeOffice(dir_);
+  auto run = [&](const std::string& seed, const std::string& out) {
+    const SimRun r = sim({"--map", "office.yaml", "--agents", "2", "--duration", "2", "--budget-expansions", "200",
+                          "--seed", seed, "--json", out, "--quiet"});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    Json j = json(out);
+    j["planner"].erase("plan_us");  // wall-clock
+    return j;
+  };
+  const Json a = run("5", "a.json");
+  const Json b = run("5", "b.json");
+  EXPECT_EQ(a.dump(), b.dump());
+  // Another seed starts the agents elsewhere.
+  const Json c = run("6", "c.json");
+  EXPECT_NE(a["agents"].dump(), c["agents"].dump());
+}
+
+TEST_F(StaaSim, MultiAgentSvgWritesFramesOfTheWholeMap) {
+  writeOffice(dir_);
+  const SimRun r = sim({"--map", "office.yaml", "--agents", "2", "--mode", "ghost", "--duration", "1",
+                        "--budget-expansions", "100", "--svg", "frames", "--svg-every", "10", "--json", "out.json",
+                        "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir_ / "frames")) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  // 30 cycles, a frame every 10: cycles 0, 10 and 20.
+  EXPECT_EQ(names, (std::vector<std::string>{"frame_00000.svg", "frame_00010.svg", "frame_00020.svg"}));
+  EXPECT_EQ(json("out.json")["frames_written"], 3);
+  const std::string svg = readFile(dir_ / "frames" / "frame_00020.svg");
+  EXPECT_THAT(svg, HasSubstr("<svg"));
+  EXPECT_THAT(svg, HasSubstr("office: t = 0.70 s, 2 agents (ghost, staa)"));
+  EXPECT_THAT(svg, HasSubstr("observed agent"));
+  EXPECT_THAT(svg, HasSubstr("ghost agent"));
+  EXPECT_THAT(svg, HasSubstr(">42</text>"));  // the map's goals, numbered
 }
 
 }  // namespace

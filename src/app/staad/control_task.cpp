@@ -1,0 +1,314 @@
+#include "app/staad/control_task.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace staa::staad {
+
+namespace {
+
+rt::Nanos secondsToNanos(double s) { return static_cast<rt::Nanos>(std::llround(s * 1e9)); }
+
+ControlConfig controlConfigOf(const DaemonConfig& config) {
+  ControlConfig c = config.control;
+  c.rate_hz = config.control_hz;
+  c.max_dynamic_obstacles = hal::ObstacleFrame::kMaxObstacles;
+  return c;
+}
+
+PlannerBudget budgetOf(const DaemonConfig& config, ClockFn clock) {
+  if (config.budget_expansions) return PlannerBudget::expansions(*config.budget_expansions);
+  return PlannerBudget::wallClock(secondsToNanos(config.budget_ms * 1e-3), clock);
+}
+
+DaemonState fromCycleState(CycleState s) {
+  switch (s) {
+    case CycleState::kIdle: return DaemonState::kIdle;
+    case CycleState::kDriving: return DaemonState::kDriving;
+    case CycleState::kReached: return DaemonState::kReached;
+    case CycleState::kUnreachable: return DaemonState::kUnreachable;
+  }
+  return DaemonState::kIdle;
+}
+
+// Log messages are string literals (rt::LogRecord keeps the pointer).
+const char* stateMessage(DaemonState s) {
+  switch (s) {
+    case DaemonState::kIdle: return "state: idle";
+    case DaemonState::kDriving: return "state: driving";
+    case DaemonState::kReached: return "state: reached the goal at (x, y, theta)";
+    case DaemonState::kUnreachable: return "state: goal unreachable from (x, y, theta)";
+    case DaemonState::kStopped: return "state: stopped";
+    case DaemonState::kFault: return "state: fault";
+  }
+  return "state: ?";
+}
+
+const char* faultMessage(FaultKind f) {
+  switch (f) {
+    case FaultKind::kNone: return "fault cleared: inputs fresh again";
+    case FaultKind::kStaleOdometry: return "fault: stale odometry, braking (age s, limit s)";
+    case FaultKind::kStaleObstacles: return "fault: stale obstacle frames, braking (age s, limit s)";
+    case FaultKind::kBase: return "fault: the base reports a fault, braking (fault, code)";
+  }
+  return "fault: ?";
+}
+
+double ageSeconds(rt::Nanos now, rt::Nanos stamp) { return stamp < 0 ? -1.0 : static_cast<double>(now - stamp) * 1e-9; }
+
+}  // namespace
+
+hal::VelocityCommand brakeCommand(rt::Nanos stamp) {
+  hal::VelocityCommand c;
+  c.stamp = stamp;
+  c.v = 0.0;
+  c.w = 0.0;
+  c.brake = true;
+  return c;
+}
+
+ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, ClockFn planner_clock)
+    : ch_(channels),
+      period_(secondsToNanos(1.0 / config.control_hz)),
+      odometry_timeout_(secondsToNanos(config.odometry_timeout_s)),
+      obstacles_timeout_(secondsToNanos(config.obstacles_timeout_s)),
+      budget_(budgetOf(config, planner_clock)),
+      telemetry_on_(!config.telemetry_path.empty()),
+      limits_(config.robot.limits),
+      cycle_(config.map, config.robot, controlConfigOf(config)),
+      obstacles_(hal::ObstacleFrame::kMaxObstacles) {}
+
+void ControlTask::log(rt::Nanos now, rt::LogLevel level, const char* message, double a, double b, double c,
+                      std::uint8_t count) {
+  rt::LogRecord r;
+  r.time = now;
+  r.level = level;
+  r.message = message;
+  r.values[0] = a;
+  r.values[1] = b;
+  r.values[2] = c;
+  r.value_count = count;
+  ch_.control_log.push(r);  // a full ring drops (and counts) the record
+}
+
+// 1. Requests from the service thread.
+void ControlTask::takeRequests(rt::Nanos now) {
+  if (!shutdown_ && ch_.shutdown.load(std::memory_order_acquire)) {
+    shutdown_ = true;
+    stopped_ = true;
+    has_goal_ = false;
+    cycle_.clearGoal();
+    log(now, rt::LogLevel::kInfo, "shutting down: braking to standstill");
+  }
+  Request request;
+  while (ch_.requests.pop(request)) {
+    if (shutdown_) continue;  // stopping: the robot stays braked
+    switch (request.kind) {
+      case RequestKind::kGoal:
+        cycle_.setGoal(request.pose);
+        has_goal_ = true;
+        goal_ = request.pose;
+        stopped_ = false;
+        log(now, rt::LogLevel::kInfo, "goal accepted (x, y, theta)", request.pose.x, request.pose.y, request.pose.theta,
+            3);
+        break;
+      case RequestKind::kStop:
+        cycle_.clearGoal();
+        has_goal_ = false;
+        stopped_ = true;
+        log(now, rt::LogLevel::kInfo, "stop requested: braking, goal dropped");
+        break;
+      case RequestKind::kPose:
+        // Only the base thread may call Base::setPose.
+        if (!ch_.poses.push(request.pose)) log(now, rt::LogLevel::kWarning, "pose request dropped: the base thread's ring is full");
+        break;
+      case RequestKind::kStatus: break;  // answered by the service thread itself
+    }
+  }
+}
+
+// 2. The latest inputs.
+void ControlTask::takeInputs() {
+  if (ch_.base.update()) base_ = ch_.base.readBuffer();
+  if (ch_.obstacles.update()) {
+    const hal::ObstacleFrame& frame = ch_.obstacles.readBuffer();
+    const std::size_t n = std::min(frame.count, hal::ObstacleFrame::kMaxObstacles);
+    for (std::size_t i = 0; i < n; ++i) {
+      const hal::ObstacleFrame::Obstacle& o = frame.obstacles[i];
+      views_[i] = PolygonView(o.vertices.data(), std::min(o.n, hal::ObstacleFrame::kMaxVertices));
+      velocities_[i] = o.velocity;
+    }
+    // set() copies (hulls) the polygons: the views may dangle after the next update().
+    obstacles_.set(std::span<const PolygonView>(views_.data(), n), std::span<const Vec2>(velocities_.data(), n));
+    obstacles_stamp_ = frame.stamp;
+  }
+}
+
+// 3. Stale or faulty inputs hold the robot.
+FaultKind ControlTask::judgeInputs(rt::Nanos now) const {
+  const rt::Nanos odometry_stamp = base_.odometry.stamp;
+  if (odometry_stamp < 0 || now - odometry_stamp > odometry_timeout_) return FaultKind::kStaleOdometry;
+  if (obstacles_stamp_ < 0 || now - obstacles_stamp_ > obstacles_timeout_) return FaultKind::kStaleObstacles;
+  if (base_.status.fault != hal::BaseFault::kNone) return FaultKind::kBase;
+  return FaultKind::kNone;
+}
+
+void ControlTask::setState(rt::Nanos now, DaemonState state, FaultKind fault) {
+  if (fault != fault_) {
+    const rt::LogLevel level = fault == FaultKind::kNone ? rt::LogLevel::kInfo : rt::LogLevel::kError;
+    switch (fault) {
+      case FaultKind::kStaleOdometry:
+        log(now, level, faultMessage(fault), ageSeconds(now, base_.odometry.stamp),
+            static_cast<double>(odometry_timeout_) * 1e-9, 0.0, 2);
+        break;
+      case FaultKind::kStaleObstacles:
+        log(now, level, faultMessage(fault), ageSeconds(now, obstacles_stamp_),
+            static_cast<double>(obstacles_timeout_) * 1e-9, 0.0, 2);
+        break;
+      case FaultKind::kBase:
+        log(now, level, faultMessage(fault), static_cast<double>(base_.status.fault),
+            static_cast<double>(base_.status.fault_code), 0.0, 2);
+        break;
+      case FaultKind::kNone: log(now, level, faultMessage(fault)); break;
+    }
+    fault_ = fault;
+  }
+  if (state != state_) {
+    const Pose2& p = base_.odometry.pose;
+    if (state == DaemonState::kReached || state == DaemonState::kUnreachable) {
+      const rt::LogLevel level = state == DaemonState::kReached ? rt::LogLevel::kInfo : rt::LogLevel::kWarning;
+      log(now, level, stateMessage(state), p.x, p.y, p.theta, 3);
+    } else if (state != DaemonState::kFault) {  // faults are logged above
+      log(now, rt::LogLevel::kInfo, stateMessage(state));
+    }
+    state_ = state;
+  }
+}
+
+void ControlTask::cycle(rt::Nanos now) {
+  flushTelemetry();  // the previous cycle's record, now that its overrun is known
+  takeRequests(now);
+  takeInputs();
+  const FaultKind fault = judgeInputs(now);
+
+  const hal::Odometry& odo = base_.odometry;
+  CycleOutput& out = last_output_;
+  if (fault != FaultKind::kNone) {
+    // Brake; the planner does not run on inputs it cannot trust.
+    out = CycleOutput{};
+    setState(now, DaemonState::kFault, fault);
+    publishCommand(now, nullptr);
+  } else if (stopped_) {
+    out = CycleOutput{};
+    setState(now, DaemonState::kStopped, fault);
+    publishCommand(now, nullptr);
+  } else {
+    // 4. One cycle of the paper's Sec. III.
+    CycleInputs in;
+    in.robot = UnicycleState{odo.pose.x, odo.pose.y, odo.pose.theta, odo.v, odo.w};
+    in.obstacles = &obstacles_;
+    out = cycle_.step(in, budget_);
+    setState(now, fromCycleState(out.state), fault);
+    publishCommand(now, &out);
+  }
+  ++cycles_;
+  publishStatus(now);
+
+  // 7. This cycle's telemetry record (pushed at the start of the next cycle).
+  if (telemetry_on_) {
+    TelemetryRecord& r = pending_;
+    r.t_s = static_cast<double>(now) * 1e-9;
+    r.x = odo.pose.x;
+    r.y = odo.pose.y;
+    r.theta = odo.pose.theta;
+    r.v = odo.v;
+    r.w = odo.w;
+    r.v_cmd = last_command_.command.v;
+    r.w_cmd = last_command_.command.w;
+    r.expansions = out.planned ? out.plan.stats.pops : 0u;
+    r.depth = out.planned ? out.plan.depth : 0;
+    r.budget_used_ms = static_cast<double>(out.plan_ns) * 1e-6;
+    r.overrun = false;
+    has_pending_ = true;
+  }
+  ch_.heartbeat.store(cycles_, std::memory_order_release);
+}
+
+// 5. The command for the next period, and the one after it (the base thread's fallback).
+void ControlTask::publishCommand(rt::Nanos now, const CycleOutput* out) {
+  CommandSlot& slot = ch_.command.writeBuffer();
+  if (out == nullptr) {
+    slot.command = brakeCommand(now);
+    slot.next = brakeCommand(now);
+  } else {
+    slot.command.stamp = now;
+    slot.command.v = out->v_cmd;
+    slot.command.w = out->w_cmd;
+    slot.command.brake = false;
+    if (out->planned) {
+      // STAA*'s first action holds for dt (0.3 s), far longer than two control periods: the
+      // plan's action for the following period is the same acceleration, carried on from
+      // this period's command (never through standstill).
+      const double t = static_cast<double>(period_) * 1e-9;
+      const Action& a = out->plan.first_action;
+      double v = std::clamp(out->v_cmd + a.a * t, limits_.v_min, limits_.v_max);
+      double w = std::clamp(out->w_cmd + a.b * t, -limits_.w_max, limits_.w_max);
+      if (v * out->v_cmd < 0.0) v = 0.0;
+      if (w * out->w_cmd < 0.0) w = 0.0;
+      slot.next.stamp = now;
+      slot.next.v = v;
+      slot.next.w = w;
+      slot.next.brake = false;
+    } else {
+      // Idle, reached, unreachable: the cycle is decelerating to a stop; after it, brake.
+      slot.next = brakeCommand(now);
+    }
+  }
+  last_command_ = slot;
+  ch_.command.publish();
+}
+
+// 6. The status for the service thread.
+void ControlTask::publishStatus(rt::Nanos now) {
+  Status& s = ch_.status.writeBuffer();
+  s.state = state_;
+  s.pose = base_.odometry.pose;
+  s.v = base_.odometry.v;
+  s.w = base_.odometry.w;
+  s.v_cmd = last_command_.command.v;
+  s.w_cmd = last_command_.command.w;
+  s.has_goal = has_goal_;
+  s.goal = goal_;
+  s.fault = fault_;
+  s.base_fault = base_.status.fault;
+  s.base_fault_code = base_.status.fault_code;
+  s.cycles = cycles_;
+  if (loop_ != nullptr) {
+    const rt::PeriodicCounters& c = loop_->counters();
+    s.overruns = c.overruns;
+    s.execution_overruns = c.execution_overruns;
+    s.late_wakeups = c.late_wakeups;
+    s.skipped_periods = c.skipped_periods;
+  }
+  // Percentiles are read by the service thread from the loop's histograms (costly here).
+  s.odometry_age_s = ageSeconds(now, base_.odometry.stamp);
+  s.obstacles_age_s = ageSeconds(now, obstacles_stamp_);
+  s.expansions = last_output_.planned ? last_output_.plan.stats.pops : 0u;
+  s.depth = last_output_.planned ? static_cast<double>(last_output_.plan.depth) : 0.0;
+  s.time_s = static_cast<double>(now) * 1e-9;
+  last_status_ = s;
+  ch_.status.publish();
+}
+
+void ControlTask::flushTelemetry() {
+  if (!has_pending_) return;
+  if (loop_ != nullptr) {
+    const std::uint64_t overruns = loop_->counters().overruns;
+    pending_.overrun = overruns > overruns_seen_;
+    overruns_seen_ = overruns;
+  }
+  ch_.telemetry.push(pending_);  // a full ring drops and counts
+  has_pending_ = false;
+}
+
+}  // namespace staa::staad

@@ -1,0 +1,108 @@
+#pragma once
+// What staad's control thread does in one cycle, as a plain object (like Orocos's
+// SlaveActivity: *what* runs is separate from *when*): the daemon calls cycle() from its
+// 30 Hz periodic thread, the tests call it in lockstep with a manual time line.
+//
+// cycle(now), top to bottom:
+//   1. requests from the service thread: goal, stop, pose (forwarded to the base thread);
+//   2. the latest odometry + base status, and the latest obstacle frame;
+//   3. the inputs judged: stale odometry, stale obstacles, a base fault -> brake and report;
+//      each clears by itself when the input is fresh again;
+//   4. ControlCycle::step with the planner budget (wall clock or expansions);
+//   5. the command (and the plan's next action, the base thread's fallback) published;
+//   6. the status published;
+//   7. a telemetry record, and log records on state changes and faults.
+// No allocation, no lock, no I/O: everything is sized by the constructor.
+
+#include "app/staad/channels.hpp"
+#include "app/staad/config.hpp"
+#include "control/control_cycle.hpp"
+#include "local/dynamic_obstacles.hpp"
+#include "planner/budget.hpp"
+#include "rt/periodic.hpp"
+
+#include <array>
+#include <cstdint>
+
+namespace staa::staad {
+
+class ControlTask {
+ public:
+  // `planner_clock` drives a wall-clock budget (config budget.ms); with budget.expansions
+  // the run is reproducible and the clock is not read by the planner.
+  ControlTask(const DaemonConfig& config, Channels& channels, ClockFn planner_clock = &steadyClockNs);
+  ControlTask(const ControlTask&) = delete;
+  ControlTask& operator=(const ControlTask&) = delete;
+
+  // One control cycle at time `now` (the time this cycle woke).
+  void cycle(rt::Nanos now);
+
+  // The periodic loop that runs this task (same thread): its counters go into the status
+  // and each telemetry record learns whether its cycle overran. Optional (lockstep tests).
+  void attachLoop(const rt::PeriodicLoop* loop) { loop_ = loop; }
+
+  // Pushes the last cycle's telemetry record (each cycle pushes its predecessor's; the
+  // control thread calls this once more when it ends).
+  void flushTelemetry();
+
+  // What the last cycle decided (control thread, or the test driving it).
+  DaemonState state() const { return state_; }
+  FaultKind fault() const { return fault_; }
+  const CommandSlot& lastCommand() const { return last_command_; }
+  const Status& lastStatus() const { return last_status_; }
+  const CycleOutput& lastOutput() const { return last_output_; }
+  std::uint64_t cycles() const { return cycles_; }
+  rt::Nanos period() const { return period_; }
+  ControlCycle& controlCycle() { return cycle_; }
+
+ private:
+  void takeRequests(rt::Nanos now);
+  void takeInputs();
+  FaultKind judgeInputs(rt::Nanos now) const;
+  void setState(rt::Nanos now, DaemonState state, FaultKind fault);
+  void publishCommand(rt::Nanos now, const CycleOutput* out);
+  void publishStatus(rt::Nanos now);
+  void log(rt::Nanos now, rt::LogLevel level, const char* message, double a = 0.0, double b = 0.0, double c = 0.0,
+           std::uint8_t count = 0);
+
+  Channels& ch_;
+  rt::Nanos period_;
+  rt::Nanos odometry_timeout_;
+  rt::Nanos obstacles_timeout_;
+  PlannerBudget budget_;
+  bool telemetry_on_;
+  MotionLimits limits_;
+
+  ControlCycle cycle_;
+  DynamicObstacleSet obstacles_;
+  std::array<PolygonView, hal::ObstacleFrame::kMaxObstacles> views_{};
+  std::array<Vec2, hal::ObstacleFrame::kMaxObstacles> velocities_{};
+
+  // Inputs as last taken.
+  BaseSample base_;
+  rt::Nanos obstacles_stamp_ = -1;
+
+  // What the robot is doing.
+  DaemonState state_ = DaemonState::kIdle;
+  FaultKind fault_ = FaultKind::kNone;
+  bool has_goal_ = false;
+  Pose2 goal_;
+  bool stopped_ = false;   // a stop request (or the daemon stopping) holds the robot
+  bool shutdown_ = false;  // the daemon is stopping: requests are ignored
+  CycleOutput last_output_;
+  CommandSlot last_command_;
+  Status last_status_;
+  std::uint64_t cycles_ = 0;
+
+  // Telemetry: the record of the last cycle waits one cycle so that its overrun flag (known
+  // only after the periodic loop's finish()) is filled in.
+  const rt::PeriodicLoop* loop_ = nullptr;
+  TelemetryRecord pending_;
+  bool has_pending_ = false;
+  std::uint64_t overruns_seen_ = 0;
+};
+
+// The command that stops the robot: v = w = 0 with the base's full deceleration.
+hal::VelocityCommand brakeCommand(rt::Nanos stamp);
+
+}  // namespace staa::staad

@@ -1,0 +1,306 @@
+#include "app/staad/daemon.hpp"
+
+#include "app/staad/channels.hpp"
+#include "app/staad/control_task.hpp"
+#include "app/staad/io_tasks.hpp"
+#include "app/staad/service.hpp"
+#include "hal/sim/sim_hal.hpp"
+#include "rt/alloc_count.hpp"
+#include "rt/periodic.hpp"
+#include "rt/realtime.hpp"
+#include "rt/sd_notify.hpp"
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <system_error>
+
+namespace staa::staad {
+
+namespace {
+
+constexpr rt::Nanos kInputWait = 1 * rt::kNanosPerSecond;         // first odometry / obstacle frame
+constexpr rt::Nanos kFirstCycleWait = 5 * rt::kNanosPerSecond;    // the control thread's first cycle
+constexpr rt::Nanos kStandstillWait = 600 * rt::kNanosPerMilli;   // braking before STOPPING=1
+constexpr double kStandstillV = 0.02;                             // m/s
+constexpr double kStandstillW = 0.02;                             // rad/s
+constexpr int kServicePollMs = 10;
+
+rt::Nanos periodOf(double hz) { return static_cast<rt::Nanos>(std::llround(1e9 / hz)); }
+
+// One periodic real-time thread: its schedule is created by the thread itself (before it
+// marks itself real-time); other threads read it only after `started` (for the control
+// thread: after its first heartbeat).
+struct Worker {
+  explicit Worker(const char* n) : name(n) {}
+  const char* name;
+  rt::RtThread thread;
+  std::optional<rt::PeriodicLoop> loop;
+  std::atomic<bool> started{false};
+};
+
+class Daemon {
+ public:
+  Daemon(DaemonConfig config, rt::Clock& clock, std::ostream& log)
+      : config_(std::move(config)), clock_(clock), log_(log) {}
+  ~Daemon() { stopThreads(); }
+
+  int run();
+
+ private:
+  void createWorkspaces();
+  void startThreads();
+  void startPeriodic(Worker& worker, const rt::ThreadSpec& spec, rt::Nanos period, void (Daemon::*body)(rt::Nanos));
+  void controlBody(rt::Nanos now) { task_->cycle(now); }
+  void baseBody(rt::Nanos now) { base_task_->cycle(now); }
+  void perceptionBody(rt::Nanos now) { perception_task_->cycle(now); }
+  bool waitFor(rt::Nanos timeout, bool (Daemon::*done)() const);
+  bool inputsArrived() const { return channels_->base.published() > 0 && channels_->obstacles.published() > 0; }
+  bool controlCycled() const { return channels_->heartbeat.load(std::memory_order_acquire) > 0; }
+  void shutdown();
+  void stopThreads();
+  void reportTiming(const Worker& worker);
+  void say(const std::string& line) { log_ << "staad: " << line << std::endl; }
+
+  DaemonConfig config_;
+  rt::Clock& clock_;
+  std::ostream& log_;
+  std::optional<rt::Notifier> notifier_;
+  std::unique_ptr<hal::SimHal> sim_;
+  std::unique_ptr<Channels> channels_;
+  std::unique_ptr<ControlTask> task_;
+  std::unique_ptr<BaseTask> base_task_;
+  std::unique_ptr<PerceptionTask> perception_task_;
+  std::unique_ptr<Service> service_;
+  std::atomic<bool> running_{true};  // the periodic threads loop while set
+  Worker control_{"control"};
+  Worker base_{"base"};
+  Worker perception_{"perception"};
+};
+
+void Daemon::createWorkspaces() {
+  // sd_notify: a malformed environment is a configuration error.
+  std::optional<rt::Nanos> watchdog;
+  try {
+    notifier_.emplace(rt::Notifier::fromEnvironment());
+    watchdog = rt::Notifier::watchdogInterval();
+  } catch (const std::exception& e) {
+    throw ConfigError(e.what());
+  }
+
+  const rt::Nanos now = clock_.now();
+  try {
+    sim_ = std::make_unique<hal::SimHal>(config_.map, config_.robot, config_.sim, now);
+  } catch (const std::invalid_argument& e) {
+    std::string message = config_.file.string();
+    message.append(": sim: ").append(e.what());
+    throw ConfigError(message);
+  }
+  channels_ = std::make_unique<Channels>(config_.telemetry_records);
+  task_ = std::make_unique<ControlTask>(config_, *channels_);
+  base_task_ = std::make_unique<BaseTask>(sim_->base(), *channels_, periodOf(config_.control_hz));
+  perception_task_ = std::make_unique<PerceptionTask>(sim_->obstacles(), *channels_);
+
+  ServiceOptions so;
+  so.socket_path = config_.socket_path;
+  so.socket_mode = config_.socket_mode;
+  so.telemetry_path = config_.telemetry_path;
+  so.watchdog_interval = watchdog;
+  service_ = std::make_unique<Service>(*channels_, *notifier_, so, log_);
+  service_->open();
+}
+
+void Daemon::startPeriodic(Worker& worker, const rt::ThreadSpec& spec, rt::Nanos period,
+                           void (Daemon::*body)(rt::Nanos)) {
+  worker.thread.start(spec, [this, &worker, period, body] {
+    // Set-up (allocates: the loop's histograms), then real-time from here on.
+    rt::PeriodicLoop& loop = worker.loop.emplace(clock_, period, clock_.now() + period);
+    if (&worker == &control_) task_->attachLoop(&loop);
+    rt::markRealtimeThread(true);
+    worker.started.store(true, std::memory_order_release);
+    while (running_.load(std::memory_order_acquire)) {
+      const rt::Wake wake = loop.wait();
+      (this->*body)(wake.woke);
+      loop.finish();
+    }
+    if (&worker == &control_) task_->flushTelemetry();
+    if (&worker == &base_) base_task_->brake(clock_.now());  // the base's last command
+    rt::markRealtimeThread(false);
+  });
+  if (!worker.thread.warning().empty()) say(worker.thread.warning());
+}
+
+bool Daemon::waitFor(rt::Nanos timeout, bool (Daemon::*done)() const) {
+  const rt::Nanos deadline = clock_.now() + timeout;
+  while (!(this->*done)()) {
+    if (clock_.now() >= deadline) return false;
+    clock_.sleepUntil(clock_.now() + rt::kNanosPerMilli);
+  }
+  return true;
+}
+
+void Daemon::startThreads() {
+  startPeriodic(base_, config_.base_thread, periodOf(config_.base_hz), &Daemon::baseBody);
+  startPeriodic(perception_, config_.perception_thread, periodOf(config_.perception_hz), &Daemon::perceptionBody);
+  if (!waitFor(kInputWait, &Daemon::inputsArrived)) {
+    say("warning: no odometry or obstacle frame within 1 s of start-up; the robot is held (fault) until they come");
+  }
+  startPeriodic(control_, config_.control_thread, periodOf(config_.control_hz), &Daemon::controlBody);
+  if (!waitFor(kFirstCycleWait, &Daemon::controlCycled)) {
+    throw std::runtime_error("the control thread did not run its first cycle within 5 s");
+  }
+}
+
+void Daemon::stopThreads() {
+  running_.store(false, std::memory_order_release);
+  for (Worker* w : {&control_, &perception_, &base_}) {
+    if (w->thread.running()) w->thread.join();
+  }
+}
+
+void Daemon::reportTiming(const Worker& w) {
+  if (!w.loop) return;
+  const rt::PeriodicCounters& c = w.loop->counters();
+  const rt::TimingSummary e = w.loop->execution().summary();
+  const rt::TimingSummary k = w.loop->wakeLatency().summary();
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "[%s] %llu cycles; execution p50 %.0f us, p99 %.0f us, max %.0f us; wake-up p99 %.0f us, max %.0f us; "
+                "%llu overruns (%llu execution, %llu late wake-ups), %llu periods skipped",
+                w.name, static_cast<unsigned long long>(c.cycles), e.p50_us, e.p99_us, e.max_us, k.p99_us, k.max_us,
+                static_cast<unsigned long long>(c.overruns), static_cast<unsigned long long>(c.execution_overruns),
+                static_cast<unsigned long long>(c.late_wakeups), static_cast<unsigned long long>(c.skipped_periods));
+  say(line);
+}
+
+void Daemon::shutdown() {
+  // Brake to standstill (bounded), then STOPPING=1, then the threads end.
+  const rt::Nanos t0 = clock_.now();
+  channels_->shutdown.store(true, std::memory_order_release);
+  bool standing = false;
+  rt::Nanos now = t0;
+  for (; !standing && now - t0 < kStandstillWait; now = clock_.now()) {
+    service_->runOnce(now, 5);
+    const Status& s = service_->latest();
+    standing = s.time_s * 1e9 >= static_cast<double>(t0) && std::abs(s.v) < kStandstillV && std::abs(s.w) < kStandstillW;
+  }
+  char braked[96];
+  std::snprintf(braked, sizeof braked, standing ? "braked to standstill in %.0f ms" : "still moving after %.0f ms of braking",
+                static_cast<double>(now - t0) * 1e-6);
+  say(braked);
+  service_->stopping();
+  stopThreads();
+  service_->drain();
+  const Status& s = service_->latest();
+  char line[160];
+  std::snprintf(line, sizeof line, "stopped at (%.3f, %.3f, %.3f), v %.3f m/s, w %.3f rad/s; %llu rt allocations",
+                s.pose.x, s.pose.y, s.pose.theta, s.v, s.w,
+                static_cast<unsigned long long>(rt::realtimeAllocations()));
+  say(line);
+  for (const Worker* w : {&control_, &base_, &perception_}) reportTiming(*w);
+  service_->close();
+}
+
+int Daemon::run() {
+  try {
+    createWorkspaces();
+  } catch (const ConfigError& e) {
+    say(e.what());
+    return kExitBadConfig;
+  }
+
+  const rt::MemoryReport memory = rt::lockMemory(config_.heap_prefault_bytes, config_.stack_prefault_bytes);
+  for (const std::string& w : memory.warnings) say("warning: " + w);
+
+  startThreads();
+  rt::resetRealtimeAllocations();
+  service_->setControlTiming(&control_.loop->execution(), &control_.loop->wakeLatency(), control_.thread.realtime());
+  service_->ready(clock_.now());
+  {
+    char line[256];
+    std::snprintf(line, sizeof line, "ready: hal %s, control %.0f Hz (%s), base %.0f Hz, perception %.0f Hz, socket %s",
+                  config_.hal.c_str(), config_.control_hz,
+                  control_.thread.realtime() ? "SCHED_FIFO" : "normal scheduling", config_.base_hz,
+                  config_.perception_hz, config_.socket_path.c_str());
+    say(line);
+  }
+
+  while (!service_->runOnce(clock_.now(), kServicePollMs)) {
+  }
+  shutdown();
+  return kExitOk;
+}
+
+}  // namespace
+
+std::filesystem::path defaultConfigPath() {
+  for (const char* candidate : {"config/staad.yaml", "/etc/staad/staad.yaml"}) {
+    std::error_code ec;
+    if (std::filesystem::exists(candidate, ec)) return candidate;
+  }
+  return {};
+}
+
+DaemonConfig loadConfig(const DaemonOptions& options) {
+  std::filesystem::path file = options.config_file;
+  if (file.empty()) {
+    file = defaultConfigPath();
+    if (file.empty()) {
+      throw ConfigError("no config file: neither config/staad.yaml nor /etc/staad/staad.yaml exists (use --config FILE)");
+    }
+  }
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) {
+    std::string message = "config file '";
+    message.append(file.string()).append("': ").append(std::filesystem::exists(file, ec) ? "not a regular file" : "not found");
+    throw ConfigError(message);
+  }
+  DaemonConfig config = loadDaemonConfig(file);
+  if (options.hal) config.hal = *options.hal;
+  if (options.socket_path) config.socket_path = *options.socket_path;
+  if (options.telemetry_path) config.telemetry_path = *options.telemetry_path;
+  if (config.hal == "socketcan") {
+    throw ConfigError("hal socketcan: not built yet (use --hal sim)");
+  }
+  if (config.hal != "sim") {
+    std::string message = "hal: must be sim or socketcan, got '";
+    message.append(config.hal).append("'");
+    throw ConfigError(message);
+  }
+  return config;
+}
+
+int runDaemon(const DaemonOptions& options, rt::Clock& clock, std::ostream& log) {
+  try {
+    DaemonConfig config;
+    try {
+      config = loadConfig(options);
+    } catch (const ConfigError& e) {
+      log << "staad: " << e.what() << std::endl;
+      return kExitBadConfig;
+    }
+    // Before any thread exists: SIGTERM/SIGINT arrive only through the service's signalfd.
+    blockTerminationSignals();
+    Daemon daemon(std::move(config), clock, log);
+    return daemon.run();
+  } catch (const ServiceError& e) {
+    log << "staad: " << e.what() << std::endl;
+    return kExitFailure;
+  } catch (const std::system_error& e) {
+    log << "staad: " << e.what() << std::endl;
+    return kExitFailure;
+  } catch (const std::exception& e) {
+    log << "staad: " << e.what() << std::endl;
+    return kExitFailure;
+  } catch (...) {
+    log << "staad: unknown error" << std::endl;
+    return kExitFailure;
+  }
+}
+
+}  // namespace staa::staad

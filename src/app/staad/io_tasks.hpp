@@ -1,0 +1,73 @@
+#pragma once
+// What staad's base I/O and perception threads do in one period, as plain objects (the
+// threads only call cycle(); tests call it in lockstep with the control task).
+//
+// BaseTask (base_hz): pose corrections forwarded by the control thread; base.read(now);
+// odometry + status published; the command chosen: the control thread's latest while it is
+// fresh (younger than 1.5 control periods), else its plan's next action (younger than 2.5
+// periods), else a brake; base.write(now, command).
+//
+// PerceptionTask (perception_hz): a new obstacle frame from the sensor is published.
+//
+// No allocation, no lock, no I/O beyond the HAL's own non-blocking calls.
+
+#include "app/staad/channels.hpp"
+#include "hal/base.hpp"
+#include "hal/obstacles.hpp"
+
+#include <cstdint>
+
+namespace staa::staad {
+
+enum class CommandSource : std::uint8_t {
+  kControl,   // the control thread's latest command
+  kPlanNext,  // the control thread missed a cycle: its plan's next action
+  kBrake,     // it missed more (or never sent one): brake
+};
+const char* toString(CommandSource source);
+
+class BaseTask {
+ public:
+  BaseTask(hal::Base& base, Channels& channels, rt::Nanos control_period);
+
+  void cycle(rt::Nanos now);
+  // The base thread's last words: a brake (the daemon is stopping).
+  void brake(rt::Nanos now);
+
+  CommandSource source() const { return source_; }
+  const hal::VelocityCommand& lastCommand() const { return last_; }
+  std::uint64_t fallbacks() const { return fallbacks_; }  // periods on the plan's next action
+  std::uint64_t brakes() const { return brakes_; }        // periods braked for lack of commands
+  std::uint64_t posesRefused() const { return poses_refused_; }
+
+ private:
+  void log(rt::Nanos now, rt::LogLevel level, const char* message, double a = 0.0, double b = 0.0, double c = 0.0,
+           std::uint8_t count = 0);
+
+  hal::Base& base_;
+  Channels& ch_;
+  rt::Nanos fresh_limit_;     // 1.5 control periods
+  rt::Nanos fallback_limit_;  // 2.5 control periods
+  CommandSource source_ = CommandSource::kBrake;
+  hal::VelocityCommand last_;
+  bool commanded_ = false;  // a control command has been received at all
+  std::uint64_t fallbacks_ = 0;
+  std::uint64_t brakes_ = 0;
+  std::uint64_t poses_refused_ = 0;
+};
+
+class PerceptionTask {
+ public:
+  PerceptionTask(hal::ObstacleSensor& sensor, Channels& channels);
+  // True when a new frame was published.
+  bool cycle(rt::Nanos now);
+  std::uint64_t frames() const { return frames_; }
+
+ private:
+  hal::ObstacleSensor& sensor_;
+  Channels& ch_;
+  std::uint64_t frames_ = 0;
+  std::uint64_t dropped_seen_ = 0;
+};
+
+}  // namespace staa::staad

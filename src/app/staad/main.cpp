@@ -1,0 +1,48 @@
+// staad: the STAA* motion controller daemon (docs/staad.md).
+//
+//   staad [--config FILE] [--hal sim|socketcan] [--socket PATH] [--telemetry FILE]
+//
+// Exit status: 0 stopped by SIGTERM/SIGINT, 1 run-time failure (socket busy, a thread could
+// not start), 2 bad config, arguments or environment (the message names the key and value).
+#include "app/staad/daemon.hpp"
+#include "rt/clock.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <exception>
+#include <iostream>
+
+int main(int argc, char** argv) {
+  using namespace staa::staad;
+  try {
+    CLI::App app{"staad: the STAA* motion controller daemon (real-time, 30 Hz)"};
+    std::string config;
+    std::string hal;
+    std::string socket;
+    std::string telemetry;
+    app.add_option("--config", config, "daemon config (default: config/staad.yaml, then /etc/staad/staad.yaml)");
+    app.add_option("--hal", hal, "hardware: sim (the simulator) or socketcan")->check(CLI::IsMember({"sim", "socketcan"}));
+    app.add_option("--socket", socket, "control socket path (overrides socket.path)");
+    app.add_option("--telemetry", telemetry, "telemetry CSV file (overrides telemetry.path)");
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+      const int code = app.exit(e);
+      return code == 0 ? kExitOk : kExitBadConfig;
+    }
+
+    DaemonOptions options;
+    options.config_file = config;
+    if (!hal.empty()) options.hal = hal;
+    if (!socket.empty()) options.socket_path = socket;
+    if (!telemetry.empty()) options.telemetry_path = telemetry;
+    staa::rt::MonotonicClock clock;
+    return runDaemon(options, clock, std::cerr);
+  } catch (const std::exception& e) {
+    std::cerr << "staad: " << e.what() << std::endl;
+    return kExitFailure;
+  } catch (...) {
+    std::cerr << "staad: unknown error" << std::endl;
+    return kExitFailure;
+  }
+}

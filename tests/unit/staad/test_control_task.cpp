@@ -1,0 +1,488 @@
+// staad's control, base and perception tasks in lockstep: one test thread plays all three
+// threads on a manual time line (base at 100 Hz, perception and control at 30 Hz), with the
+// scripted HAL (hal::MockBase integrates the commands as a perfect unicycle) on the office map
+// with the paper's agent and an expansion budget, so every run is the same. The requests come
+// in through the same ring the service thread fills.
+#include "app/staad/channels.hpp"
+#include "app/staad/config.hpp"
+#include "app/staad/control_task.hpp"
+#include "app/staad/io_tasks.hpp"
+#include "app/staad/telemetry.hpp"
+#include "hal/mock/mock_hal.hpp"
+#include "map/polygon_map.hpp"
+#include "rt/alloc_count.hpp"
+
+#include "shared_dir.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <iostream>
+
+namespace staa::staad {
+namespace {
+
+constexpr rt::Nanos kMs = rt::kNanosPerMilli;
+
+DaemonConfig officeConfig(std::uint32_t expansions = 300) {
+  DaemonConfig c;
+  c.robot_file = test::sourceDir() / "config/robots/paper-agent.yaml";
+  c.robot = loadRobotProfile(c.robot_file);
+  c.map_file = test::sourceDir() / "config/maps/office.yaml";
+  c.map = loadPolygonMap(c.map_file);
+  c.control_hz = 30.0;
+  c.base_hz = 100.0;
+  c.perception_hz = 30.0;
+  c.budget_expansions = expansions;  // deterministic
+  c.control.rate_hz = 30.0;
+  c.odometry_timeout_s = 0.1;
+  c.obstacles_timeout_s = 0.2;
+  c.telemetry_path = "telemetry.csv";  // on: the task pushes records (the file is the service's)
+  return c;
+}
+
+// The corridor along the office's south rooms: 3 m wide, straight.
+const Pose2 kStart{4.5, 4.5, 0.0};
+const Pose2 kGoal{8.5, 4.5, 0.0};
+const Pose2 kGoal2{7.0, 4.0, 3.14};
+
+class Lockstep {
+ public:
+  explicit Lockstep(const DaemonConfig& c, const Pose2& start = kStart)
+      : config(c),
+        ch(1024),
+        base(c.robot, start),
+        task(c, ch),
+        base_task(base, ch, task.period()),
+        perception(sensor, ch),
+        control_period(task.period()) {
+    next_control = control_period;
+  }
+
+  // One control period: the base and perception ticks up to the next control deadline,
+  // then (unless paused) the control cycle. The service's part: the rings are drained.
+  void step() {
+    const rt::Nanos target = next_control;
+    while (next_base <= target || next_perception <= target) {
+      if (next_base <= next_perception) {
+        now = next_base;
+        base_task.cycle(now);
+        next_base += kBasePeriod;
+      } else {
+        now = next_perception;
+        perception.cycle(now);
+        next_perception += control_period;
+      }
+    }
+    now = target;
+    if (!control_paused) task.cycle(now);
+    next_control += control_period;
+    drain();
+  }
+  void steps(int n) {
+    for (int i = 0; i < n; ++i) step();
+  }
+  // Steps until `done` or `max` cycles; returns the cycles run.
+  template <typename Done>
+  int stepUntil(Done done, int max) {
+    for (int i = 0; i < max; ++i) {
+      if (done()) return i;
+      step();
+    }
+    return max;
+  }
+
+  void request(RequestKind kind, const Pose2& pose = {}) {
+    Request r;
+    r.kind = kind;
+    r.pose = pose;
+    ASSERT_TRUE(ch.requests.push(r));
+  }
+
+  void drain() {
+    TelemetryRecord t;
+    while (ch.telemetry.pop(t)) {
+      last_telemetry = t;
+      ++telemetry_records;
+    }
+    rt::LogRecord r;
+    for (rt::LogRing* ring : {&ch.control_log, &ch.base_log, &ch.perception_log}) {
+      while (ring->pop(r)) {
+        ++log_records;
+        last_log = r.message;
+      }
+    }
+  }
+
+  Status status() {
+    ch.status.update();
+    return ch.status.readBuffer();
+  }
+  double distanceTo(const Pose2& p) const {
+    const Pose2 q = base.odometry().pose;
+    return std::hypot(q.x - p.x, q.y - p.y);
+  }
+
+  static constexpr rt::Nanos kBasePeriod = 10 * kMs;
+  DaemonConfig config;
+  Channels ch;
+  hal::MockBase base;
+  hal::MockObstacles sensor;
+  ControlTask task;
+  BaseTask base_task;
+  PerceptionTask perception;
+  rt::Nanos control_period;
+  rt::Nanos now = 0;
+  rt::Nanos next_base = 0;
+  rt::Nanos next_perception = 0;
+  rt::Nanos next_control = 0;
+  bool control_paused = false;
+  TelemetryRecord last_telemetry;
+  std::uint64_t telemetry_records = 0;
+  std::uint64_t log_records = 0;
+  const char* last_log = "";
+};
+
+bool isBrake(const hal::VelocityCommand& c) { return c.brake && c.v == 0.0 && c.w == 0.0; }
+
+TEST(ControlTask, IdleUntilAGoalThenDrivesToItAndReportsReached) {
+  Lockstep ls(officeConfig());
+  ls.steps(5);
+  EXPECT_EQ(ls.task.state(), DaemonState::kIdle);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kNone);
+  EXPECT_FALSE(ls.status().has_goal);
+
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.step();
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+  const Status driving = ls.status();
+  EXPECT_TRUE(driving.has_goal);
+  EXPECT_DOUBLE_EQ(driving.goal.x, kGoal.x);
+  EXPECT_DOUBLE_EQ(driving.goal.y, kGoal.y);
+
+  // 4 m at up to 2 m/s: well within 20 s of simulated time.
+  const int cycles = ls.stepUntil([&] { return ls.task.state() == DaemonState::kReached; }, 600);
+  ASSERT_EQ(ls.task.state(), DaemonState::kReached) << "after " << cycles << " cycles at "
+                                                     << ls.base.odometry().pose.x << ", " << ls.base.odometry().pose.y;
+  EXPECT_LE(ls.distanceTo(kGoal), ls.config.control.goal_tolerance_m + 1e-9);
+  EXPECT_GT(cycles, 60);  // it really drove (3 m/s would be faster than the robot can)
+  std::cout << "reached the goal 4 m away after " << cycles << " cycles (" << cycles / 30.0 << " s)\n";
+  ls.steps(30);           // and stays there, stopped
+  EXPECT_EQ(ls.task.state(), DaemonState::kReached);
+  EXPECT_NEAR(ls.base.odometry().v, 0.0, 0.05);
+  const Status reached = ls.status();
+  EXPECT_EQ(reached.state, DaemonState::kReached);
+  EXPECT_NEAR(reached.pose.x, ls.base.odometry().pose.x, 0.1);
+  EXPECT_GT(reached.cycles, 60u);
+  EXPECT_GE(reached.odometry_age_s, 0.0);
+  EXPECT_LT(reached.odometry_age_s, 0.1);
+  EXPECT_GE(reached.obstacles_age_s, 0.0);
+
+  // One telemetry record per cycle (each pushed one cycle later), with the cycle's values.
+  EXPECT_EQ(ls.telemetry_records + 1, ls.task.cycles());
+  EXPECT_GT(ls.last_telemetry.t_s, 0.0);
+  EXPECT_NEAR(ls.last_telemetry.x, ls.base.odometry().pose.x, 0.1);
+  EXPECT_FALSE(ls.last_telemetry.overrun);
+  EXPECT_GT(ls.log_records, 0u);  // goal accepted, reached
+}
+
+TEST(ControlTask, PlansWithTheBudgetAndPublishesCommandAndPlanNextAction) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(10);
+  const CycleOutput& out = ls.task.lastOutput();
+  ASSERT_TRUE(out.planned);
+  EXPECT_LE(out.plan.stats.pops, 300u);  // the expansion budget
+  const CommandSlot& slot = ls.task.lastCommand();
+  EXPECT_EQ(slot.command.stamp, ls.now);
+  EXPECT_FALSE(slot.command.brake);
+  EXPECT_DOUBLE_EQ(slot.command.v, out.v_cmd);
+  EXPECT_DOUBLE_EQ(slot.command.w, out.w_cmd);
+  // The next period's fallback continues the plan's first action.
+  const double t = 1.0 / 30.0;
+  EXPECT_NEAR(slot.next.v, std::clamp(out.v_cmd + out.plan.first_action.a * t, -1.0, 2.0), 1e-6);
+  EXPECT_GT(ls.base.odometry().v, 0.1);  // accelerating along the corridor
+  EXPECT_EQ(ls.status().expansions, out.plan.stats.pops);
+}
+
+TEST(ControlTask, StaleOdometryBrakesWithinTheTimeoutAndRecovers) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(20);
+  ASSERT_EQ(ls.task.state(), DaemonState::kDriving);
+
+  ls.base.freezeOdometry(true);
+  const rt::Nanos frozen_at = ls.now;
+  ls.step();  // 33 ms: still within the 100 ms limit
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+  const int cycles = ls.stepUntil([&] { return ls.task.state() == DaemonState::kFault; }, 30);
+  ASSERT_EQ(ls.task.state(), DaemonState::kFault);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kStaleOdometry);
+  // Detected at the first cycle past the timeout (+ the base period the stamp may lag).
+  EXPECT_LE(ls.now - frozen_at, 100 * kMs + Lockstep::kBasePeriod + ls.control_period);
+  EXPECT_LE(cycles, 4);
+  EXPECT_TRUE(isBrake(ls.task.lastCommand().command));
+  EXPECT_TRUE(isBrake(ls.task.lastCommand().next));
+  ls.step();
+  EXPECT_TRUE(isBrake(ls.base_task.lastCommand()));
+  const Status s = ls.status();
+  EXPECT_EQ(s.state, DaemonState::kFault);
+  EXPECT_EQ(s.fault, FaultKind::kStaleOdometry);
+  EXPECT_GT(s.odometry_age_s, 0.1);
+  EXPECT_EQ(s.v_cmd, 0.0);
+  EXPECT_TRUE(s.has_goal);  // the goal is kept
+
+  ls.base.freezeOdometry(false);
+  ls.steps(2);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kNone);
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+  EXPECT_FALSE(ls.task.lastCommand().command.brake);
+  ls.steps(10);
+  EXPECT_GT(ls.base.odometry().v, 0.3);  // on its way again
+}
+
+TEST(ControlTask, NoOdometryAtAllIsAFaultFromTheStart) {
+  Lockstep ls(officeConfig());
+  ls.base.freezeOdometry(true);  // never a fresh stamp
+  ls.control_paused = true;
+  ls.steps(1);
+  ls.control_paused = false;
+  // MockBase may have stamped its first read; by 200 ms the odometry is stale regardless.
+  ls.steps(6);
+  EXPECT_EQ(ls.task.state(), DaemonState::kFault);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kStaleOdometry);
+  EXPECT_TRUE(isBrake(ls.task.lastCommand().command));
+}
+
+TEST(ControlTask, StaleObstacleFramesBrakeAndRecover) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(15);
+  ASSERT_EQ(ls.task.state(), DaemonState::kDriving);
+
+  ls.sensor.stall(true);
+  const rt::Nanos stalled_at = ls.now;
+  ls.steps(3);  // 100 ms: within the 200 ms limit
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+  ls.stepUntil([&] { return ls.task.state() == DaemonState::kFault; }, 30);
+  ASSERT_EQ(ls.task.state(), DaemonState::kFault);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kStaleObstacles);
+  EXPECT_LE(ls.now - stalled_at, 200 * kMs + 2 * ls.control_period);
+  EXPECT_TRUE(isBrake(ls.task.lastCommand().command));
+  EXPECT_GT(ls.status().obstacles_age_s, 0.2);
+
+  ls.sensor.stall(false);
+  ls.steps(2);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kNone);
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+}
+
+TEST(ControlTask, BaseFaultBrakesAndClearsWithTheFault) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(15);
+  ASSERT_EQ(ls.task.state(), DaemonState::kDriving);
+
+  ls.base.setFault(hal::BaseFault::kEmergencyStop, 7);
+  ls.steps(2);
+  EXPECT_EQ(ls.task.state(), DaemonState::kFault);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kBase);
+  EXPECT_TRUE(isBrake(ls.task.lastCommand().command));
+  const Status s = ls.status();
+  EXPECT_EQ(s.fault, FaultKind::kBase);
+  EXPECT_EQ(s.base_fault, hal::BaseFault::kEmergencyStop);
+  EXPECT_EQ(s.base_fault_code, 7u);
+
+  ls.base.setFault(hal::BaseFault::kNone, 0);
+  ls.steps(2);
+  EXPECT_EQ(ls.task.fault(), FaultKind::kNone);
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+}
+
+TEST(ControlTask, FaultWithoutAGoalRecoversToIdle) {
+  Lockstep ls(officeConfig());
+  ls.steps(3);
+  ls.base.setFault(hal::BaseFault::kDriverFault, 3);
+  ls.steps(2);
+  EXPECT_EQ(ls.task.state(), DaemonState::kFault);
+  ls.base.setFault(hal::BaseFault::kNone, 0);
+  ls.steps(2);
+  EXPECT_EQ(ls.task.state(), DaemonState::kIdle);
+}
+
+TEST(ControlTask, StopRequestBrakesDropsTheGoalAndHoldsUntilANewGoal) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(30);
+  ASSERT_GT(ls.base.odometry().v, 0.5);
+
+  ls.request(RequestKind::kStop);
+  ls.step();
+  EXPECT_EQ(ls.task.state(), DaemonState::kStopped);
+  EXPECT_EQ(ls.task.lastCommand().command.v, 0.0);
+  EXPECT_EQ(ls.task.lastCommand().command.w, 0.0);
+  EXPECT_TRUE(ls.task.lastCommand().command.brake);
+  Status s = ls.status();
+  EXPECT_EQ(s.state, DaemonState::kStopped);
+  EXPECT_FALSE(s.has_goal);
+  EXPECT_EQ(s.v_cmd, 0.0);
+  ls.steps(45);  // 1.5 s: the robot stands
+  EXPECT_NEAR(ls.base.odometry().v, 0.0, 1e-3);
+  EXPECT_EQ(ls.task.state(), DaemonState::kStopped);
+
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.step();
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+}
+
+TEST(ControlTask, ShutdownBrakesAndIgnoresLaterGoals) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(30);
+  ls.ch.shutdown.store(true);
+  ls.step();
+  EXPECT_EQ(ls.task.state(), DaemonState::kStopped);
+  EXPECT_TRUE(isBrake(ls.task.lastCommand().command));
+  ls.request(RequestKind::kGoal, kGoal2);
+  ls.steps(2);
+  EXPECT_EQ(ls.task.state(), DaemonState::kStopped);
+  EXPECT_FALSE(ls.status().has_goal);
+}
+
+TEST(ControlTask, PoseRequestReachesTheBaseThroughTheControlThread) {
+  Lockstep ls(officeConfig());
+  ls.steps(2);
+  ls.request(RequestKind::kPose, Pose2{6.0, 4.0, 0.5});
+  ls.steps(2);  // control forwards it, the base thread applies it
+  EXPECT_NEAR(ls.base.odometry().pose.x, 6.0, 1e-6);
+  EXPECT_NEAR(ls.base.odometry().pose.y, 4.0, 1e-6);
+  EXPECT_NEAR(ls.status().pose.theta, 0.5, 1e-6);
+}
+
+TEST(ControlTask, UnreachableGoalIsReported) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, Pose2{1.5, 1.5, 0.0});  // inside a solid corner block
+  ls.stepUntil([&] { return ls.task.state() == DaemonState::kUnreachable; }, 10);
+  EXPECT_EQ(ls.task.state(), DaemonState::kUnreachable);
+  EXPECT_EQ(ls.status().state, DaemonState::kUnreachable);
+}
+
+TEST(BaseTask, FallsBackToThePlansNextActionThenBrakesWhenControlFallsSilent) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(20);
+  ASSERT_EQ(ls.base_task.source(), CommandSource::kControl);
+  const CommandSlot slot = ls.task.lastCommand();
+
+  ls.control_paused = true;
+  // Base ticks after the last command: < 1.5 periods: the command; < 2.5: the plan's next
+  // action; after that a brake.
+  bool saw_next = false;
+  for (int i = 0; i < 12; ++i) {
+    const rt::Nanos t = ls.next_base;
+    ls.base_task.cycle(t);
+    ls.next_base += Lockstep::kBasePeriod;
+    const rt::Nanos age = t - slot.command.stamp;
+    if (age < ls.control_period * 3 / 2) {
+      EXPECT_EQ(ls.base_task.source(), CommandSource::kControl) << age;
+      EXPECT_DOUBLE_EQ(ls.base_task.lastCommand().v, slot.command.v);
+    } else if (age < ls.control_period * 5 / 2) {
+      EXPECT_EQ(ls.base_task.source(), CommandSource::kPlanNext) << age;
+      EXPECT_DOUBLE_EQ(ls.base_task.lastCommand().v, slot.next.v);
+      saw_next = true;
+    } else {
+      EXPECT_EQ(ls.base_task.source(), CommandSource::kBrake) << age;
+      EXPECT_TRUE(isBrake(ls.base_task.lastCommand()));
+    }
+  }
+  EXPECT_TRUE(saw_next);
+  EXPECT_GT(ls.base_task.fallbacks(), 0u);
+  EXPECT_GT(ls.base_task.brakes(), 0u);
+  // Control back: its command again.
+  ls.control_paused = false;
+  ls.next_control = ls.next_base;
+  ls.step();
+  ls.base_task.cycle(ls.now + 1);
+  EXPECT_EQ(ls.base_task.source(), CommandSource::kControl);
+}
+
+TEST(BaseTask, BrakesBeforeTheControlThreadHasSentAnything) {
+  Lockstep ls(officeConfig());
+  ls.base_task.cycle(0);
+  EXPECT_EQ(ls.base_task.source(), CommandSource::kBrake);
+  EXPECT_TRUE(isBrake(ls.base_task.lastCommand()));
+}
+
+TEST(ControlTask, ThousandCyclesWithGoalChangesAndAStopAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_control_task must link staa_rt_alloc_hook";
+  // A small budget keeps the sanitizer run short; the allocations do not depend on it.
+  Lockstep ls(officeConfig(100));
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(5);  // warm-up, not counted
+
+  // The counter counts (a direct call: a new-expression could be elided).
+  rt::resetRealtimeAllocations();
+  rt::markRealtimeThread(true);
+  ::operator delete(::operator new(16));
+  rt::markRealtimeThread(false);
+  ASSERT_EQ(rt::realtimeAllocations(), 1u);
+
+  rt::resetRealtimeAllocations();
+  rt::markRealtimeThread(true);
+  int reached = 0;
+  for (int k = 0; k < 1000; ++k) {
+    // Goal changes and a stop happen in the real-time thread too.
+    if (k == 150) ls.request(RequestKind::kGoal, kGoal2);
+    if (k == 400) ls.request(RequestKind::kStop);
+    if (k == 450) ls.request(RequestKind::kGoal, kGoal);
+    if (k == 700) ls.request(RequestKind::kPose, Pose2{5.0, 4.5, 0.0});
+    if (k == 720) ls.request(RequestKind::kGoal, Pose2{12.0, 5.0, 0.0});
+    if (k == 940) ls.request(RequestKind::kGoal, Pose2{10.5, 1.5, -1.57});  // into a room: new polygons
+    ls.step();
+    reached += ls.task.state() == DaemonState::kReached;
+  }
+  rt::markRealtimeThread(false);
+  const std::uint64_t allocations = rt::realtimeAllocations();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(reached, 0);
+  EXPECT_EQ(ls.task.cycles(), 1005u);
+}
+
+TEST(Telemetry, RowsFollowTheDocumentedHeader) {
+  EXPECT_STREQ(telemetryHeader(), "t_s,x,y,theta,v,w,v_cmd,w_cmd,expansions,depth,budget_used_ms,overrun");
+  TelemetryRecord r;
+  r.t_s = 12.5;
+  r.x = 1.25;
+  r.y = -2.0;
+  r.theta = 0.5;
+  r.v = 1.0;
+  r.w = -0.25;
+  r.v_cmd = 1.1;
+  r.w_cmd = -0.3;
+  r.expansions = 812;
+  r.depth = 4;
+  r.budget_used_ms = 18.75;
+  r.overrun = true;
+  EXPECT_EQ(formatTelemetryRow(r), "12.500000,1.2500,-2.0000,0.5000,1.0000,-0.2500,1.1000,-0.3000,812,4,18.750,1");
+}
+
+TEST(Telemetry, RingRoundsUpDropsWhenFullAndKeepsOrder) {
+  TelemetryRing ring(5);
+  EXPECT_EQ(ring.capacity(), 8u);
+  TelemetryRecord r;
+  for (int i = 0; i < 10; ++i) {
+    r.expansions = static_cast<std::uint32_t>(i);
+    EXPECT_EQ(ring.push(r), i < 8);
+  }
+  EXPECT_EQ(ring.dropped(), 2u);
+  for (std::uint32_t i = 0; i < 8; ++i) {
+    ASSERT_TRUE(ring.pop(r));
+    EXPECT_EQ(r.expansions, i);
+  }
+  EXPECT_FALSE(ring.pop(r));
+}
+
+}  // namespace
+}  // namespace staa::staad

@@ -1,0 +1,540 @@
+// The staad binary end to end, with the simulated HAL: a temporary config (the shipped robot
+// and map), a temporary control socket and a temporary NOTIFY_SOCKET that this test binds,
+// WATCHDOG_USEC=400000. READY=1 and watchdog pings arrive; `staactl goal` drives the robot to
+// the goal and `status --json` says reached with zero real-time allocations; garbage on the
+// socket gets error replies while the daemon keeps answering; several clients at once; a
+// second daemon on the same socket is refused; SIGTERM while driving gives STOPPING=1 and
+// exit 0 within one second; bad or missing config exits 2 naming the key or the path.
+//
+// Every wait has a timeout, and every process this test starts is killed in teardown.
+#include "shared_dir.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+constexpr double kGoalTolerance = 0.2;
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A child process, killed (SIGKILL) and reaped when this goes out of scope.
+class Child {
+ public:
+  Child() = default;
+  Child(const std::vector<std::string>& argv, const std::vector<std::string>& env, const fs::path& out,
+        const fs::path& err) {
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<char*> args;
+    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    std::vector<char*> envp;
+    for (const std::string& e : env) envp.push_back(const_cast<char*>(e.c_str()));
+    envp.push_back(nullptr);
+    const int rc = posix_spawn(&pid_, argv[0].c_str(), &fa, nullptr, args.data(), envp.data());
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc != 0) pid_ = -1;
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  Child(Child&& o) noexcept : pid_(o.pid_), status_(o.status_), reaped_(o.reaped_) { o.pid_ = -1; }
+  Child& operator=(Child&& o) noexcept {
+    if (this != &o) {
+      kill();
+      pid_ = o.pid_;
+      status_ = o.status_;
+      reaped_ = o.reaped_;
+      o.pid_ = -1;
+    }
+    return *this;
+  }
+  ~Child() { kill(); }
+
+  pid_t pid() const { return pid_; }
+  bool alive() { return pid_ > 0 && !reaped_ && !poll(); }
+  // Waits up to `timeout` for the exit; the exit code, or nullopt (still running / killed).
+  std::optional<int> wait(milliseconds timeout) {
+    const auto deadline = Clock::now() + timeout;
+    while (!poll()) {
+      if (Clock::now() >= deadline) return std::nullopt;
+      std::this_thread::sleep_for(milliseconds(2));
+    }
+    if (WIFEXITED(status_)) return WEXITSTATUS(status_);
+    return std::nullopt;
+  }
+  void signal(int sig) {
+    if (pid_ > 0 && !reaped_) ::kill(pid_, sig);
+  }
+  void kill() {
+    if (pid_ <= 0 || reaped_) return;
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, &status_, 0);
+    reaped_ = true;
+  }
+
+ private:
+  bool poll() {
+    if (reaped_) return true;
+    if (pid_ <= 0) return true;
+    const pid_t r = ::waitpid(pid_, &status_, WNOHANG);
+    if (r == pid_) reaped_ = true;
+    return reaped_;
+  }
+  pid_t pid_ = -1;
+  int status_ = 0;
+  bool reaped_ = false;
+};
+
+std::vector<std::string> environmentWithout(const std::vector<std::string>& drop_prefixes) {
+  std::vector<std::string> env;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string entry(*e);
+    bool keep = true;
+    for (const std::string& p : drop_prefixes) keep = keep && entry.rfind(p, 0) != 0;
+    if (keep) env.push_back(entry);
+  }
+  return env;
+}
+
+// The datagram socket that plays systemd's notification socket. Like systemd, it reads every
+// datagram as it comes (a background thread): a full receive queue would block the sender.
+class NotifySocket {
+ public:
+  struct Message {
+    Clock::time_point when;
+    std::string text;
+  };
+
+  explicit NotifySocket(const fs::path& path) : path_(path) {
+    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+    ok_ = fd_ >= 0 && ::bind(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0;
+    if (ok_) reader_ = std::thread([this] { read(); });
+  }
+  ~NotifySocket() {
+    stop_.store(true);
+    if (reader_.joinable()) reader_.join();
+    if (fd_ >= 0) ::close(fd_);
+    ::unlink(path_.c_str());
+  }
+  bool ok() const { return ok_; }
+
+  // Waits until a message after the last one found contains `what`; its time, or nullopt
+  // after `timeout`.
+  std::optional<Clock::time_point> waitFor(const std::string& what, milliseconds timeout) {
+    std::unique_lock lock(mutex_);
+    std::optional<Clock::time_point> found;
+    cv_.wait_for(lock, timeout, [&] {
+      for (; cursor_ < messages_.size(); ++cursor_) {
+        if (messages_[cursor_].text.find(what) != std::string::npos) {
+          found = messages_[cursor_++].when;
+          return true;
+        }
+      }
+      return false;
+    });
+    return found;
+  }
+  // Messages containing `what` received in [from, to).
+  int count(const std::string& what, Clock::time_point from, Clock::time_point to) {
+    std::lock_guard lock(mutex_);
+    int n = 0;
+    for (const Message& m : messages_) n += m.when >= from && m.when < to && m.text.find(what) != std::string::npos;
+    return n;
+  }
+
+ private:
+  void read() {
+    while (!stop_.load()) {
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      char buf[4096];
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, MSG_DONTWAIT);
+      if (n < 0) continue;
+      {
+        std::lock_guard lock(mutex_);
+        messages_.push_back({Clock::now(), std::string(buf, static_cast<std::size_t>(n))});
+      }
+      cv_.notify_all();
+    }
+  }
+
+  fs::path path_;
+  int fd_ = -1;
+  bool ok_ = false;
+  std::atomic<bool> stop_{false};
+  std::thread reader_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::vector<Message> messages_;
+  std::size_t cursor_ = 0;
+};
+
+// A raw control-socket connection.
+class RawClient {
+ public:
+  explicit RawClient(const fs::path& socket) {
+    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, socket.c_str(), sizeof addr.sun_path - 1);
+    connected_ = fd_ >= 0 && ::connect(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0;
+  }
+  ~RawClient() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  bool connected() const { return connected_; }
+  bool send(const std::string& data) {
+    std::size_t sent = 0;
+    while (sent < data.size()) {
+      const ssize_t n = ::send(fd_, data.data() + sent, data.size() - sent, MSG_NOSIGNAL);
+      if (n <= 0) return false;
+      sent += static_cast<std::size_t>(n);
+    }
+    return true;
+  }
+  // One reply line (without '\n'), or nullopt after `timeout` or on EOF.
+  std::optional<std::string> readLine(milliseconds timeout) {
+    const auto deadline = Clock::now() + timeout;
+    for (;;) {
+      const std::size_t nl = buffer_.find('\n');
+      if (nl != std::string::npos) {
+        std::string line = buffer_.substr(0, nl);
+        buffer_.erase(0, nl + 1);
+        return line;
+      }
+      const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
+      if (left.count() <= 0) return std::nullopt;
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return std::nullopt;
+      char buf[4096];
+      const ssize_t n = ::read(fd_, buf, sizeof buf);
+      if (n <= 0) return std::nullopt;
+      buffer_.append(buf, static_cast<std::size_t>(n));
+    }
+  }
+
+ private:
+  int fd_ = -1;
+  bool connected_ = false;
+  std::string buffer_;
+};
+
+bool isErrorReply(const std::optional<std::string>& line) {
+  if (!line) return false;
+  const auto j = nlohmann::json::parse(*line, nullptr, false);
+  return j.is_object() && j.value("ok", true) == false && j.contains("error") && j["error"].is_string();
+}
+
+bool isOkReply(const std::optional<std::string>& line) {
+  if (!line) return false;
+  const auto j = nlohmann::json::parse(*line, nullptr, false);
+  return j.is_object() && j.value("ok", false) == true;
+}
+
+class StaadE2E : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char pattern[] = "/tmp/staad-e2e-XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    socket_ = dir_ / "staad.sock";
+    telemetry_ = dir_ / "telemetry.csv";
+  }
+  void TearDown() override {
+    daemon_.kill();
+    if (HasFailure()) {
+      std::cerr << "---- staad's stderr ----\n" << readFile(dir_ / "staad.err") << "------------------------\n";
+    }
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  std::string config(const std::string& rates = "{control_hz: 30, base_hz: 100, perception_hz: 30}") const {
+    const fs::path src = staa::test::sourceDir();
+    std::string y;
+    y += "format: staad-config/1\n";
+    y += "robot: " + (src / "config/robots/paper-agent.yaml").string() + "\n";
+    y += "map: " + (src / "config/maps/office.yaml").string() + "\n";
+    y += "hal: sim\n";
+    y += "sim: {start: [4.5, 4.5, 0.0], movers: 0, seed: 1}\n";
+    y += "rates: " + rates + "\n";
+    y += "budget: {ms: 15}\n";
+    y += "threads:\n";
+    y += "  control: {priority: 80, cpu: -1}\n";
+    y += "  base: {priority: 85, cpu: -1}\n";
+    y += "  perception: {priority: 70, cpu: -1}\n";
+    y += "socket: {path: " + socket_.string() + ", mode: \"0660\"}\n";
+    y += "limits: {odometry_timeout_s: 0.1, obstacles_timeout_s: 0.2}\n";
+    y += "goal: {tolerance_m: 0.2, heading_tolerance: 0.4}\n";
+    y += "telemetry: {path: " + telemetry_.string() + ", records: 4096}\n";
+    y += "memory: {heap_prefault_mb: 16, stack_prefault_kb: 256}\n";
+    return y;
+  }
+  fs::path writeConfig(const std::string& text, const std::string& name = "staad.yaml") const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+
+  Child startDaemon(const fs::path& config_file, const std::vector<std::string>& extra_env, const std::string& tag) {
+    std::vector<std::string> env = environmentWithout({"NOTIFY_SOCKET=", "WATCHDOG_USEC=", "WATCHDOG_PID="});
+    env.insert(env.end(), extra_env.begin(), extra_env.end());
+    return Child({STAAD_EXE, "--config", config_file.string(), "--hal", "sim"}, env, dir_ / (tag + ".out"),
+                 dir_ / (tag + ".err"));
+  }
+
+  // Runs staactl with a timeout; the exit code (nullopt: did not finish) and its stdout.
+  std::pair<std::optional<int>, std::string> staactl(const std::vector<std::string>& args) {
+    std::vector<std::string> argv{STAACTL_EXE, "--socket", socket_.string()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const fs::path out = dir_ / "staactl.out";
+    Child c(argv, environmentWithout({"NOTIFY_SOCKET="}), out, dir_ / "staactl.err");
+    const std::optional<int> code = c.wait(milliseconds(10'000));
+    return {code, readFile(out)};
+  }
+
+  std::optional<nlohmann::json> status() {
+    const auto [code, out] = staactl({"status", "--json"});
+    if (!code || *code != 0) return std::nullopt;
+    auto j = nlohmann::json::parse(out, nullptr, false);
+    if (j.is_discarded()) return std::nullopt;
+    return j;
+  }
+
+  // Polls status until `done` (true) or `timeout`.
+  template <typename Done>
+  std::optional<nlohmann::json> pollStatus(Done done, milliseconds timeout) {
+    const auto deadline = Clock::now() + timeout;
+    std::optional<nlohmann::json> last;
+    while (Clock::now() < deadline) {
+      last = status();
+      if (last && done(*last)) return last;
+      std::this_thread::sleep_for(milliseconds(50));
+    }
+    return last;
+  }
+
+  fs::path dir_;
+  fs::path socket_;
+  fs::path telemetry_;
+  Child daemon_;
+};
+
+TEST_F(StaadE2E, ReadyWatchdogDrivesToTheGoalSurvivesGarbageAndStopsOnSigterm) {
+  NotifySocket notify(dir_ / "notify.sock");
+  ASSERT_TRUE(notify.ok());
+  daemon_ = startDaemon(writeConfig(config()),
+                        {"NOTIFY_SOCKET=" + (dir_ / "notify.sock").string(), "WATCHDOG_USEC=400000"}, "staad");
+  ASSERT_GT(daemon_.pid(), 0);
+
+  // READY=1, then watchdog pings every 200 ms (half of WATCHDOG_USEC) while the control
+  // thread runs.
+  const auto ready = notify.waitFor("READY=1", milliseconds(10'000));
+  ASSERT_TRUE(ready.has_value()) << "no READY=1";
+  std::this_thread::sleep_for(milliseconds(1600));
+  const int pings = notify.count("WATCHDOG=1", *ready, *ready + milliseconds(1500));
+  EXPECT_GE(pings, 3) << "watchdog pings within 1.5 s";
+  EXPECT_LE(pings, 10);
+  ASSERT_TRUE(fs::exists(socket_));
+  EXPECT_EQ(fs::status(socket_).permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read | fs::perms::group_write);
+
+  // Idle at the start.
+  const auto idle = status();
+  ASSERT_TRUE(idle.has_value());
+  EXPECT_EQ((*idle)["state"], "idle");
+
+  // staactl goal -> reached.
+  {
+    const auto [code, out] = staactl({"goal", "10.5", "4.5", "0"});
+    ASSERT_TRUE(code.has_value());
+    EXPECT_EQ(*code, 0) << out;
+  }
+  const auto goal_sent = Clock::now();
+  const auto reached = pollStatus([](const nlohmann::json& j) { return j["state"] == "reached"; }, milliseconds(30'000));
+  ASSERT_TRUE(reached.has_value());
+  EXPECT_EQ((*reached)["state"], "reached") << reached->dump();
+  std::cout << "reached the goal 6 m away in "
+            << std::chrono::duration_cast<milliseconds>(Clock::now() - goal_sent).count() << " ms; control cycle p99 "
+            << (*reached)["cycle"]["p99_us"] << " us, max " << (*reached)["cycle"]["max_us"] << " us, overruns "
+            << (*reached)["cycle"]["overruns"] << "\n";
+  const auto& pose = (*reached)["pose"];
+  ASSERT_TRUE(pose.is_array());
+  EXPECT_LE(std::hypot(pose[0].get<double>() - 10.5, pose[1].get<double>() - 4.5), kGoalTolerance + 0.02)
+      << reached->dump();
+  EXPECT_EQ((*reached)["rt_allocations"], 0) << reached->dump();
+  EXPECT_TRUE((*reached)["fault"].is_null());
+  EXPECT_TRUE(notify.waitFor("STATUS=reached", milliseconds(2000)).has_value()) << "STATUS= on the state change";
+  EXPECT_GT((*reached)["cycle"]["count"].get<double>(), 30.0);
+
+  // Garbage on a raw connection: an error reply each, the connection and the daemon stay.
+  {
+    RawClient raw(socket_);
+    ASSERT_TRUE(raw.connected());
+    const char binary[] = {'\x01', '\x00', '\x02', '\xff', '\xfe', ' ', 'b', 'i', 'n', '\x7f', '\n'};
+    ASSERT_TRUE(raw.send(std::string(binary, sizeof binary)));
+    EXPECT_TRUE(isErrorReply(raw.readLine(milliseconds(3000))));
+    ASSERT_TRUE(raw.send("{\n"));
+    EXPECT_TRUE(isErrorReply(raw.readLine(milliseconds(3000))));
+    ASSERT_TRUE(raw.send(std::string(10'000, 'a') + "\n"));
+    EXPECT_TRUE(isErrorReply(raw.readLine(milliseconds(3000))));
+    ASSERT_TRUE(raw.send("{\"cmd\": \"fly\"}\n"));
+    EXPECT_TRUE(isErrorReply(raw.readLine(milliseconds(3000))));
+    // The same connection still works.
+    ASSERT_TRUE(raw.send("{\"cmd\": \"status\"}\n"));
+    const auto reply = raw.readLine(milliseconds(3000));
+    ASSERT_TRUE(isOkReply(reply)) << reply.value_or("(none)");
+    EXPECT_EQ(nlohmann::json::parse(*reply)["status"]["state"], "reached");
+  }
+  // Two clients at once (and staactl as a third).
+  {
+    RawClient a(socket_);
+    RawClient b(socket_);
+    ASSERT_TRUE(a.connected());
+    ASSERT_TRUE(b.connected());
+    ASSERT_TRUE(a.send("{\"cmd\": \"status\"}\n"));
+    ASSERT_TRUE(b.send("{\"cmd\": \"status\"}\n"));
+    EXPECT_TRUE(isOkReply(b.readLine(milliseconds(3000))));
+    EXPECT_TRUE(isOkReply(a.readLine(milliseconds(3000))));
+    const auto third = status();
+    ASSERT_TRUE(third.has_value());
+    ASSERT_TRUE(b.send("{\"cmd\": \"status\"}\n"));
+    EXPECT_TRUE(isOkReply(b.readLine(milliseconds(3000))));
+  }
+  EXPECT_TRUE(daemon_.alive());
+
+  // A second daemon on the same socket is refused (exit 1), the first one is undisturbed.
+  {
+    Child second = startDaemon(writeConfig(config(), "second.yaml"), {}, "second");
+    const auto code = second.wait(milliseconds(15'000));
+    ASSERT_TRUE(code.has_value());
+    EXPECT_EQ(*code, 1);
+    EXPECT_NE(readFile(dir_ / "second.err").find("already listening"), std::string::npos)
+        << readFile(dir_ / "second.err");
+    EXPECT_TRUE(fs::exists(socket_));
+    EXPECT_TRUE(status().has_value());
+  }
+
+  // Drive back, and SIGTERM at speed: brake, STOPPING=1, exit 0 within one second.
+  {
+    const auto [code, out] = staactl({"goal", "4.5", "4.5", "3.14159"});
+    ASSERT_TRUE(code.has_value());
+    EXPECT_EQ(*code, 0) << out;
+  }
+  const auto moving = pollStatus(
+      [](const nlohmann::json& j) { return j["state"] == "driving" && std::abs(j["velocity"][0].get<double>()) > 0.3; },
+      milliseconds(10'000));
+  ASSERT_TRUE(moving.has_value());
+  EXPECT_EQ((*moving)["rt_allocations"], 0) << moving->dump();
+
+  const auto t0 = Clock::now();
+  daemon_.signal(SIGTERM);
+  const auto code = daemon_.wait(milliseconds(5'000));
+  const auto elapsed = std::chrono::duration_cast<milliseconds>(Clock::now() - t0);
+  ASSERT_TRUE(code.has_value()) << "staad did not exit after SIGTERM";
+  EXPECT_EQ(*code, 0);
+  EXPECT_LT(elapsed.count(), 1000) << "exit took " << elapsed.count() << " ms";
+  std::cout << "SIGTERM at " << (*moving)["velocity"][0] << " m/s -> exit 0 in " << elapsed.count() << " ms\n";
+  EXPECT_TRUE(notify.waitFor("STOPPING=1", milliseconds(500)).has_value());
+  EXPECT_FALSE(fs::exists(socket_)) << "the socket file is removed on exit";
+
+  // The telemetry file: the documented header, one row per cycle.
+  const std::string csv = readFile(telemetry_);
+  ASSERT_EQ(csv.rfind("t_s,x,y,theta,v,w,v_cmd,w_cmd,expansions,depth,budget_used_ms,overrun\n", 0), 0u)
+      << csv.substr(0, 200);
+  std::istringstream lines(csv);
+  std::string line;
+  std::getline(lines, line);
+  int rows = 0;
+  double max_x = 0.0;
+  while (std::getline(lines, line)) {
+    ++rows;
+    std::istringstream fields(line);
+    std::string field;
+    int n = 0;
+    double x = 0.0;
+    while (std::getline(fields, field, ',')) {
+      if (n == 1) x = std::stod(field);
+      ++n;
+    }
+    EXPECT_EQ(n, 12) << line;
+    max_x = std::max(max_x, x);
+  }
+  EXPECT_GT(rows, 60);
+  EXPECT_GT(max_x, 10.0);  // the trip is in it
+}
+
+TEST_F(StaadE2E, BadConfigValueExits2NamingTheKeyAndTheValue) {
+  daemon_ = startDaemon(writeConfig(config("{control_hz: -3, base_hz: 100, perception_hz: 30}")), {}, "staad");
+  const auto code = daemon_.wait(milliseconds(10'000));
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 2);
+  const std::string err = readFile(dir_ / "staad.err");
+  EXPECT_NE(err.find("rates.control_hz"), std::string::npos) << err;
+  EXPECT_NE(err.find("-3"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(socket_));
+}
+
+TEST_F(StaadE2E, MissingConfigFileExits2NamingThePath) {
+  const fs::path missing = dir_ / "no-such-staad.yaml";
+  daemon_ = startDaemon(missing, {}, "staad");
+  const auto code = daemon_.wait(milliseconds(10'000));
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 2);
+  const std::string err = readFile(dir_ / "staad.err");
+  EXPECT_NE(err.find(missing.string()), std::string::npos) << err;
+}
+
+TEST_F(StaadE2E, BadHalArgumentExits2) {
+  Child c({STAAD_EXE, "--config", writeConfig(config()).string(), "--hal", "warp"}, environmentWithout({}),
+          dir_ / "staad.out", dir_ / "staad.err");
+  const auto code = c.wait(milliseconds(10'000));
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 2);
+  EXPECT_NE(readFile(dir_ / "staad.err").find("warp"), std::string::npos) << readFile(dir_ / "staad.err");
+}
+
+}  // namespace
