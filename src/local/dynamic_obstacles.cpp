@@ -109,9 +109,19 @@ void DynamicObstacleSet::hullInto(PolygonView polygon, FixedPolygon& out) {
   out.box = h > 0 ? boxOf(out.v.data(), h) : Box{};
 }
 
+void DynamicObstacleSet::copyFrom(const DynamicObstacleSet& other) {
+  const std::size_t n = std::min(other.count_, obstacles_.size());
+  for (std::size_t k = 0; k < n; ++k) {
+    obstacles_[k] = other.obstacles_[k];
+    velocities_[k] = other.velocities_[k];
+  }
+  count_ = n;
+  dropped_ = other.dropped_ + (other.count_ - n);
+}
+
 void DynamicObstacleSet::predict(std::size_t k, double t, FixedPolygon& out) const {
   const FixedPolygon& o = obstacles_[k];
-  const Vec2 shift = velocities_[k] * t;
+  const Vec2 shift = displacement(k, t);
   out.n = o.n;
   for (std::size_t i = 0; i < o.n; ++i) out.v[i] = o.v[i] + shift;
   out.box = o.n > 0 ? Box{o.box.min + shift, o.box.max + shift} : Box{};
@@ -125,7 +135,7 @@ void DynamicObstacleSet::predictInflated(std::size_t k, double t, double radius,
     predict(k, t, out);
     return;
   }
-  const Vec2 shift = velocities_[k] * t;
+  const Vec2 shift = displacement(k, t);
   constexpr double kQuarter = 0.5 * kPi;
 
   // Per corner: the outward normal angle of the incoming edge and the turning angle (the

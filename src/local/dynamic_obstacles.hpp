@@ -4,6 +4,7 @@
 
 #include "geometry/types.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <span>
@@ -55,6 +56,29 @@ class DynamicObstacleSet {
   const FixedPolygon& observed(std::size_t k) const { return obstacles_[k]; }
   Vec2 velocity(std::size_t k) const { return velocities_[k]; }
 
+  // How far obstacle k has moved at time t: velocity * t (constant velocity, the default), or
+  // under the braking hypothesis (setBraking) at constant velocity for the reaction time and
+  // then decelerating at `decel` to a stop. Every prediction (predict, predictInflated, and
+  // the collision checks) goes through it.
+  Vec2 displacement(std::size_t k, double t) const {
+    const Vec2 v = velocities_[k];
+    if (!(braking_decel_ > 0.0) || t <= reaction_s_) return v * t;
+    const double speed = v.norm();
+    if (speed <= 0.0) return v * t;
+    const double tau = std::min(t - reaction_s_, speed / braking_decel_);
+    const double d = speed * reaction_s_ + speed * tau - 0.5 * braking_decel_ * tau * tau;
+    return v * (d / speed);
+  }
+  // The braking hypothesis: every obstacle keeps its velocity for `reaction_s`, then brakes at
+  // `decel` (m/s^2) to a stop. decel <= 0: constant velocity again.
+  void setBraking(double reaction_s, double decel) {
+    reaction_s_ = std::max(0.0, reaction_s);
+    braking_decel_ = decel;
+  }
+  // Copies the obstacles of `other` (up to this set's capacity; the rest are dropped and
+  // counted) keeping this set's braking hypothesis. No allocation.
+  void copyFrom(const DynamicObstacleSet& other);
+
  private:
   static constexpr std::size_t kHullScratch = 128;  // points hulled per chunk
   void hullInto(PolygonView polygon, FixedPolygon& out);
@@ -65,6 +89,8 @@ class DynamicObstacleSet {
   std::vector<Vec2> hull_out_;
   std::size_t count_ = 0;
   std::size_t dropped_ = 0;
+  double reaction_s_ = 0.0;
+  double braking_decel_ = 0.0;  // 0: constant velocity
 };
 
 }  // namespace staa

@@ -253,7 +253,7 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
   bool placed = false;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     const FixedPolygon& o = obstacles.observed(k);
-    const Vec2 shift = obstacles.velocity(k) * t;
+    const Vec2 shift = obstacles.displacement(k, t);
     const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
     const double r = 0.5 * (o.box.max - o.box.min).norm();
     const double reach = r + circumradius_ + 2.0 * dynamic_margin_;
@@ -288,7 +288,7 @@ double CollisionChecker::distanceToDynamic(const Vec2& p, const DynamicObstacleS
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     const FixedPolygon& o = obstacles.observed(k);
-    const Vec2 shift = obstacles.velocity(k) * t;
+    const Vec2 shift = obstacles.displacement(k, t);
     // Box distance first: an obstacle whose box is farther than the best so far cannot win.
     const Vec2 lo = o.box.min + shift, hi = o.box.max + shift;
     const double dx = std::max({lo.x() - p.x(), 0.0, p.x() - hi.x()});

@@ -31,7 +31,10 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
       limits_(robot.limits),
       actions_(robot.limits, config.notches),
       collision_(robot, local),
-      heuristic_(config.heuristic, robot.limits, inflated_static, local) {
+      heuristic_(config.heuristic, robot.limits, inflated_static, local),
+      braking_obstacles_(64) {
+  braking_obstacles_.setBraking(config_.obstacle_reaction_s, config_.obstacle_brake_decel);
+  root_ok_.assign(actions_.size(), 1);
   nodes_.reserve(config_.max_nodes);
   queue_.reserve(config_.max_nodes);
   trajectory_.reserve(config_.max_nodes > 1024 ? 1024 : config_.max_nodes);
@@ -81,6 +84,32 @@ std::int32_t StaaStar::pop() {
   return n;
 }
 
+bool StaaStar::brakeFree(const UnicycleState& from, double t0) const {
+  const double step = config_.brake_step_s;
+  UnicycleState s = from;
+  double t = t0;
+  for (int k = 0; k < 64 && (std::abs(s.v) > 1e-3 || std::abs(s.w) > 1e-3); ++k) {
+    const ArcVelocities vel = arcVelocities(s, brakeAction(s, limits_, step), step, limits_);
+    if (!collision_.motionFreeStatic(s, vel, step)) return false;
+    if (!collision_.motionFreeDynamic(s, vel, step, braking_obstacles_, t)) return false;
+    const Pose2 p = poseAlongArc(s, vel.v_mid, vel.w_mid, step);
+    s = UnicycleState{p.x, p.y, p.theta, vel.v_end, vel.w_end};
+    t += step;
+  }
+  if (braking_obstacles_.size() == 0) return true;
+  // Standing there until the slowest obstacle has stopped too.
+  double last_stop = t;
+  for (std::size_t k = 0; k < braking_obstacles_.size(); ++k) {
+    const double speed = braking_obstacles_.velocity(k).norm();
+    if (config_.obstacle_brake_decel > 0.0) {
+      last_stop = std::max(last_stop, config_.obstacle_reaction_s + speed / config_.obstacle_brake_decel);
+    }
+  }
+  if (last_stop <= t) return true;
+  const ArcVelocities stand{0.0, 0.0, 0.0, 0.0};
+  return collision_.motionFreeDynamic(s, stand, last_stop - t, braking_obstacles_, t);
+}
+
 PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
                           PlannerBudget budget) {
   PlanResult result;
@@ -112,6 +141,27 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   push(0);
   std::int32_t best = 0;
   result.outcome = PlanResult::Outcome::kExhausted;
+
+  // Braking safety of the first actions (see StaaConfig::brake_safety).
+  bool restrict_root = false;
+  if (config_.brake_safety) {
+    braking_obstacles_.copyFrom(obstacles);
+    const double c0 = std::cos(start.theta), s0 = std::sin(start.theta);
+    std::size_t safe = 0;
+    for (std::size_t a = 0; a < actions_.size(); ++a) {
+      const ArcVelocities vel = arcVelocities(start, actions_[a], config_.dt, limits_);
+      const double c = std::cos(vel.w_mid * config_.dt), sn = std::sin(vel.w_mid * config_.dt);
+      const ArcMotion motion = makeArcMotion(start, c0, s0, vel.v_mid, vel.w_mid, config_.dt, c, sn);
+      const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, vel.w_end};
+      const bool ok = collision_.motionFreeStatic(motion) &&
+                      collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0) &&
+                      brakeFree(child, config_.dt);
+      root_ok_[a] = ok ? 1 : 0;
+      safe += ok ? 1 : 0;
+    }
+    restrict_root = safe > 0;
+    result.brake_safe_actions = static_cast<std::uint32_t>(safe);
+  }
 
   while (!queue_.empty()) {
     // Checked on every pop (paper, Sec. III-E-6).
@@ -170,6 +220,10 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     }
     for (std::size_t a = 0; a < actions_.size(); ++a) {
       ++st.successors;
+      if (restrict_root && id == 0 && root_ok_[a] == 0) {
+        ++st.collisions;  // could not brake safely after it
+        continue;
+      }
       const std::size_t j = a % notches;  // actions are ordered (a index) * notches + (b index)
       const ArcVelocities vel = arcVelocities(node.s, actions_[a], config_.dt, limits_);
       const ArcMotion motion =

@@ -41,6 +41,17 @@ struct StaaConfig {
   // never popped, so far fewer heuristic queries are made. The lowest-h state an aborted
   // search returns is then chosen among the evaluated states only. Off: the paper's way.
   bool lazy_heuristic = false;
+  // Braking safety (ours; the paper has no such rule, and its agents collided with each other
+  // when both kept driving at full speed into a head-on meeting): a first action is allowed only
+  // when the robot can brake to a stop after it without touching the map or the moving
+  // obstacles predicted under the braking hypothesis (each keeps its velocity for
+  // obstacle_reaction_s, then brakes at obstacle_brake_decel: what another robot, or a person,
+  // does when it sees us). When no first action passes, all are allowed and the search decides
+  // (braking alone would not help: something that does not brake reaches the robot anyway).
+  bool brake_safety = true;
+  double obstacle_reaction_s = 0.3;
+  double obstacle_brake_decel = 2.0;  // m/s^2
+  double brake_step_s = 0.15;         // the braking manoeuvre is checked in steps of this
 };
 
 struct PlanStats {
@@ -65,6 +76,7 @@ struct PlanResult {
   Action first_action;        // to apply until the next cycle
   UnicycleState best;         // the state the plan leads to
   double best_h = 0.0;
+  std::uint32_t brake_safe_actions = 0;  // first actions that passed the braking check
   int depth = 0;              // depth of that state
   PlanStats stats;
   std::span<const UnicycleState> trajectory;  // root .. best, valid until the next plan()
@@ -114,6 +126,9 @@ class StaaStar {
   };
 
   bool closedIndex(double x, double y, double theta, std::size_t& index) const;
+  // Whether braking at the limits from `s` (at time t0) to a stop, and standing there until
+  // every obstacle has stopped, stays free of the map and of braking_obstacles_.
+  bool brakeFree(const UnicycleState& s, double t0) const;
   void push(std::int32_t node);
   std::int32_t pop();
 
@@ -135,6 +150,10 @@ class StaaStar {
   // cosine and sine of the rotation over dt.
   std::array<double, ActionSet::kMaxNotches> rot_w_end_{}, rot_w_mid_{}, rot_c_{}, rot_s_{};
   std::vector<UnicycleState> trajectory_;
+  // Braking safety: the obstacles under the braking hypothesis (a copy per plan, no
+  // allocation) and which first actions passed.
+  DynamicObstacleSet braking_obstacles_;
+  std::vector<std::uint8_t> root_ok_;
   bool timing_ = false;
 };
 
