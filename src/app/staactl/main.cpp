@@ -1,13 +1,18 @@
 // staactl: the command-line client of staad's control socket (ARCHITECTURE.md section 6).
 //
-//   staactl [--socket PATH] goal X Y [TH] | stop | pose X Y [TH] | status [--json]
-//                           | wait [--timeout S] [--state STATE]
+//   staactl [--socket PATH] goal X Y [TH] [--wait [--timeout S]] | stop | pose X Y [TH]
+//                           | status [--json] | wait [--timeout S] [--state STATE]
 //
 // The socket is --socket, else $STAAD_SOCKET, else /run/staad/staad.sock. One request line
 // out, one reply line back (protocol.hpp), with a 2 s limit on the whole exchange: a daemon
-// that hangs makes staactl fail, never hang. Exit status: 0 ok (wait: the state was reached),
-// 1 staad refused or could not be reached (wait: the goal became unreachable), 2 bad
-// arguments, 3 wait timed out. Errors are one line on stderr naming the value.
+// that hangs makes staactl fail, never hang. Exit status: 0 ok (wait, goal --wait: the goal
+// was reached), 1 staad refused or could not be reached (wait, goal --wait: the goal became
+// unreachable, or was stopped or replaced), 2 bad arguments, 3 wait timed out. Errors are one
+// line on stderr naming the value.
+//
+// Goals have ids (staad numbers them 1, 2, ... as it queues them): `goal --wait` waits for
+// its own goal's id, and `wait` for the newest goal staad had queued at its first status
+// read, so neither mistakes the previous goal's "reached" for the new goal's.
 
 #include "app/cli_support.hpp"
 #include "app/staad/protocol.hpp"
@@ -19,6 +24,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -241,7 +247,9 @@ void printSummary(const Json& s) {
   out << "velocity        v " << numAt(s, "velocity", 0, 3) << " m/s, w " << numAt(s, "velocity", 1, 3) << " rad/s\n";
   if (const auto g = s.find("goal"); g != s.end() && g->is_array()) {
     out << "goal            x " << numAt(s, "goal", 0, 3) << " m, y " << numAt(s, "goal", 1, 3) << " m, theta "
-        << numAt(s, "goal", 2, 3) << " rad\n";
+        << numAt(s, "goal", 2, 3) << " rad";
+    if (const auto id = s.find("goal_id"); id != s.end() && id->is_number_unsigned()) out << " (goal " << id->dump() << ")";
+    out << "\n";
   } else {
     out << "goal            " << text(s, "goal", "none") << "\n";
   }
@@ -289,39 +297,127 @@ std::string socketPath(const std::string& option) {
 
 constexpr const char* kStates[] = {"idle", "driving", "reached", "unreachable", "stopped", "fault"};
 
+// A goal id in the status (an unsigned integer), or nullopt (a staad without goal ids).
+std::optional<std::uint64_t> idOf(const Json& j, const char* key) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_number_unsigned()) return std::nullopt;
+  return it->get<std::uint64_t>();
+}
+
+std::optional<staa::Vec2> pointAt(const Json& j, const char* key) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_array() || it->size() < 2 || !(*it)[0].is_number() || !(*it)[1].is_number()) {
+    return std::nullopt;
+  }
+  return staa::Vec2{(*it)[0].get<double>(), (*it)[1].get<double>()};
+}
+
+// What a wait waits for.
+struct WaitTarget {
+  std::string state = "reached";
+  // goal --wait: the id staad gave the goal. The wait ends only on a status about this goal
+  // (or a newer one that replaced it). 0: the plain `wait`.
+  std::uint64_t goal_id = 0;
+  std::optional<staa::Vec2> goal;  // goal --wait: the goal sent (for the distance shown)
+};
+
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", s);
+  return buf;
+}
+
 // Polls the status until the wanted state (exit 0), unreachable (exit 1) or the timeout (3).
-int waitFor(const std::string& socket_path, const std::string& wanted, double timeout_s) {
+// Waiting for reached (the plain `wait`), a status about an older goal than the newest one
+// queued at the first read is not the goal's; goal --wait accepts only its own goal's id.
+int waitFor(const std::string& socket_path, const WaitTarget& target, double timeout_s) {
   const auto start = SteadyClock::now();
   const auto deadline = start + std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(timeout_s));
   auto next_progress = start + kWaitProgress;
+  const bool own_goal = target.goal_id != 0;
+  const std::string what = own_goal ? "goal " + std::to_string(target.goal_id) + " to be " + target.state : target.state;
+  const std::string who = own_goal ? "goal" : "wait";
+  // The plain wait: the goal current at the first status read (ids never go back).
+  std::optional<std::uint64_t> min_id;
   std::string state;
+  std::string shown;
+  std::string to_go;
   for (;;) {
     const Json status = fetchStatus(socket_path);
     state = text(status, "state");
-    if (state == wanted) {
-      std::cout << state << "\n";
-      return kExitOk;
+    const std::uint64_t id = idOf(status, "goal_id").value_or(0);
+    if (!min_id) min_id = std::max(id, idOf(status, "queued_goal_id").value_or(0));
+    // Shown: the state, and whose it is while staad still reports another goal.
+    shown = state;
+    if (own_goal && id != target.goal_id) shown += " for goal " + std::to_string(id);
+
+    const std::optional<staa::Vec2> pose = pointAt(status, "pose");
+    const std::optional<staa::Vec2> goal = own_goal ? target.goal : pointAt(status, "goal");
+    to_go.clear();
+    if (pose && goal) {
+      char buf[48];
+      std::snprintf(buf, sizeof buf, ", %.2f m to the goal", (*pose - *goal).norm());
+      to_go = buf;
     }
-    // Unreachable is final for this goal: waiting longer cannot bring the robot there.
-    if (state == "unreachable") {
-      std::cerr << "staactl: wait: the goal is unreachable (waiting for " << wanted << ")\n";
-      return kExitFailed;
+
+    if (own_goal) {
+      if (id > target.goal_id) {
+        std::cerr << "staactl: goal: goal " << target.goal_id << " was replaced by goal " << id
+                  << " (sent by another client) before it was " << target.state << "\n";
+        return kExitFailed;
+      }
+      if (id == target.goal_id) {
+        if (state == target.state) {
+          std::cout << state << "\n";
+          return kExitOk;
+        }
+        if (state == "unreachable") {
+          std::cerr << "staactl: goal: goal " << target.goal_id << " is unreachable (state unreachable at ("
+                    << numAt(status, "pose", 0, 2) << ", " << numAt(status, "pose", 1, 2) << "))\n";
+          return kExitFailed;
+        }
+        // A stop request (or staad stopping) dropped the goal: it will not be reached.
+        if (state == "stopped") {
+          std::cerr << "staactl: goal: goal " << target.goal_id << " was dropped: staad stopped the robot\n";
+          return kExitFailed;
+        }
+      }
+      // id < goal_id: the control thread has not taken this goal yet (one control period).
+    } else {
+      // Waiting for reached, a status about a goal older than the current one is not it.
+      const bool current = target.state != "reached" || id >= *min_id;
+      if (state == target.state && current) {
+        std::cout << state << "\n";
+        return kExitOk;
+      }
+      // Unreachable is final for this goal: waiting longer cannot bring the robot there.
+      if (state == "unreachable" && current) {
+        std::cerr << "staactl: wait: the goal is unreachable (waiting for " << target.state << ")\n";
+        return kExitFailed;
+      }
     }
     const auto now = SteadyClock::now();
     if (now >= deadline) break;
     if (now >= next_progress) {
       const double elapsed = std::chrono::duration<double>(now - start).count();
-      std::cerr << "staactl: waiting for " << wanted << ": " << state << " at (" << numAt(status, "pose", 0, 2) << ", "
-                << numAt(status, "pose", 1, 2) << "), fault " << text(status, "fault", "none") << ", "
+      std::cerr << "staactl: waiting for " << what << ": " << shown << " at (" << numAt(status, "pose", 0, 2) << ", "
+                << numAt(status, "pose", 1, 2) << ")" << to_go << ", fault " << text(status, "fault", "none") << ", "
                 << static_cast<long>(elapsed) << " s\n";
       next_progress += kWaitProgress;
     }
     std::this_thread::sleep_until(std::min(now + kWaitPoll, deadline));
   }
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", timeout_s);
-  std::cerr << "staactl: wait: timed out after " << buf << " s waiting for " << wanted << " (state " << state << ")\n";
+  std::cerr << "staactl: " << who << ": timed out after " << seconds(timeout_s) << " s waiting for " << what
+            << " (state " << shown << (own_goal ? to_go : std::string()) << ")\n";
   return kExitTimeout;
+}
+
+double timeoutSeconds(const std::string& command, const std::string& text) {
+  const auto timeout = staa::cli::parseDouble(text);
+  if (!timeout || *timeout <= 0.0) {
+    throw InputError(command + ": --timeout: expected seconds (a finite number > 0), got " + inQuotes(text));
+  }
+  return *timeout;
 }
 
 int run(int argc, char** argv) {
@@ -339,7 +435,12 @@ int run(int argc, char** argv) {
     sub->add_option("TH", theta, "heading, radians (default 0)");
     return sub;
   };
-  CLI::App* goal = poseCommand("goal", "drive to the pose X Y [TH]");
+  CLI::App* goal = poseCommand("goal", "drive to the pose X Y [TH]; prints the goal's id");
+  bool goal_wait = false;
+  std::string goal_timeout_text = "120";
+  goal->add_flag("--wait", goal_wait,
+                 "then wait until this goal is reached (exit 0), unreachable (1) or the timeout (3)");
+  goal->add_option("--timeout", goal_timeout_text, "with --wait: seconds (default 120)");
   CLI::App* pose = poseCommand("pose", "set (correct) the robot's pose estimate to X Y [TH]");
   CLI::App* stop = app.add_subcommand("stop", "brake and drop the goal");
   CLI::App* status = app.add_subcommand("status", "print the daemon's state, pose, timing and faults");
@@ -379,10 +480,34 @@ int run(int argc, char** argv) {
   // Every argument is checked before the socket is touched.
   const std::string socket_path = socketPath(socket_option);
   staa::staad::Request request;
-  if (goal->parsed() || pose->parsed()) {
-    const std::string name = goal->parsed() ? "goal" : "pose";
-    request.kind = goal->parsed() ? staa::staad::RequestKind::kGoal : staa::staad::RequestKind::kPose;
-    request.pose = poseArgs(name, x, y, theta);
+  if (goal->parsed()) {
+    request.kind = staa::staad::RequestKind::kGoal;
+    request.pose = poseArgs("goal", x, y, theta);
+    std::optional<double> timeout;
+    if (goal_wait) {
+      timeout = timeoutSeconds("goal", goal_timeout_text);
+    } else if (goal->count("--timeout") > 0) {
+      throw InputError("goal: --timeout: only with --wait, got --timeout " + goal_timeout_text + " without it");
+    }
+    const Json reply = ask(socket_path, request);
+    const std::optional<std::uint64_t> id = idOf(reply, "goal_id");
+    if (!id) {
+      std::cout << "ok" << std::endl;
+      if (goal_wait) {
+        throw Failure("staad at " + socket_path + " did not give the goal an id (an older staad?): cannot wait for it");
+      }
+      return kExitOk;
+    }
+    std::cout << "ok (goal " << *id << ")" << std::endl;
+    if (!goal_wait) return kExitOk;
+    WaitTarget target;
+    target.goal_id = *id;
+    target.goal = staa::Vec2{request.pose.x, request.pose.y};
+    return waitFor(socket_path, target, *timeout);
+  }
+  if (pose->parsed()) {
+    request.kind = staa::staad::RequestKind::kPose;
+    request.pose = poseArgs("pose", x, y, theta);
   } else if (stop->parsed()) {
     request.kind = staa::staad::RequestKind::kStop;
   } else if (status->parsed()) {
@@ -394,14 +519,13 @@ int run(int argc, char** argv) {
     }
     return kExitOk;
   } else if (wait->parsed()) {
-    const auto timeout = staa::cli::parseDouble(timeout_text);
-    if (!timeout || *timeout <= 0.0) {
-      throw InputError("wait: --timeout: expected seconds (a finite number > 0), got " + inQuotes(timeout_text));
-    }
+    const double timeout = timeoutSeconds("wait", timeout_text);
     if (std::find(std::begin(kStates), std::end(kStates), wanted) == std::end(kStates)) {
       throw InputError("wait: --state: expected idle, driving, reached, unreachable, stopped or fault, got " + inQuotes(wanted));
     }
-    return waitFor(socket_path, wanted, *timeout);
+    WaitTarget target;
+    target.state = wanted;
+    return waitFor(socket_path, target, timeout);
   }
   ask(socket_path, request);
   std::cout << "ok\n";

@@ -400,12 +400,18 @@ void readGoal(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
 }
 
 void readTelemetry(const Reader& r, const YAML::Node& root, const fs::path& base, DaemonConfig& config) {
-  const YAML::Node telemetry = r.section(root, "telemetry", "telemetry", {"path", "records"});
+  const YAML::Node telemetry = r.section(root, "telemetry", "telemetry", {"path", "records", "svg"});
   if (!telemetry.IsDefined()) return;
-  if (const YAML::Node p = telemetry["path"]; p.IsDefined()) {
-    const std::string text = p.IsNull() ? std::string() : r.string(p, "telemetry.path", "a file path, or \"\" for off");
-    config.telemetry_path = text.empty() ? fs::path() : r.path(p, "telemetry.path", base);
-  }
+  // A file path, or "" (or nothing) for off.
+  auto optionalPath = [&](const char* key, fs::path& out) {
+    const YAML::Node p = telemetry[key];
+    if (!p.IsDefined()) return;
+    const std::string where = std::string("telemetry.") + key;
+    const std::string text = p.IsNull() ? std::string() : r.string(p, where, "a file path, or \"\" for off");
+    out = text.empty() ? fs::path() : r.path(p, where, base);
+  };
+  optionalPath("path", config.telemetry_path);
+  optionalPath("svg", config.svg_path);
   if (const YAML::Node n = telemetry["records"]; n.IsDefined()) {
     config.telemetry_records = static_cast<std::size_t>(r.integer(n, "telemetry.records", kMinTelemetryRecords, kMaxTelemetryRecords));
   }

@@ -19,7 +19,7 @@
 //   socket: {path: /run/staad/staad.sock, mode: "0660"}
 //   limits: {odometry_timeout_s: 0.1, obstacles_timeout_s: 0.2}
 //   goal: {tolerance_m: 0.2, heading_tolerance: 0.4}
-//   telemetry: {path: "", records: 4096}     # empty path: off
+//   telemetry: {path: "", records: 4096, svg: ""}  # empty path: off; svg: the run's picture
 //   memory: {heap_prefault_mb: 64, stack_prefault_kb: 256}
 
 #include "control/control_cycle.hpp"
@@ -63,6 +63,7 @@ struct DaemonConfig {
   double obstacles_timeout_s = 0.2;
   std::filesystem::path telemetry_path;  // empty: off
   std::size_t telemetry_records = 4096;  // ring capacity (records)
+  std::filesystem::path svg_path;        // the run's picture, written at shutdown; empty: off
   std::size_t heap_prefault_bytes = 64u << 20;
   std::size_t stack_prefault_bytes = 256u << 10;
   ControlConfig control;  // rate_hz = control_hz; goal tolerances from `goal`

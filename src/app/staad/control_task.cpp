@@ -73,7 +73,6 @@ ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, ClockFn
       odometry_timeout_(secondsToNanos(config.odometry_timeout_s)),
       obstacles_timeout_(secondsToNanos(config.obstacles_timeout_s)),
       budget_(budgetOf(config, planner_clock)),
-      telemetry_on_(!config.telemetry_path.empty()),
       limits_(config.robot.limits),
       cycle_(config.map, config.robot, controlConfigOf(config)),
       obstacles_(hal::ObstacleFrame::kMaxObstacles) {}
@@ -108,6 +107,7 @@ void ControlTask::takeRequests(rt::Nanos now) {
         cycle_.setGoal(request.pose);
         has_goal_ = true;
         goal_ = request.pose;
+        goal_id_ = request.goal_id;
         stopped_ = false;
         log(now, rt::LogLevel::kInfo, "goal accepted (x, y, theta)", request.pose.x, request.pose.y, request.pose.theta,
             3);
@@ -214,8 +214,9 @@ void ControlTask::cycle(rt::Nanos now) {
   ++cycles_;
   publishStatus(now);
 
-  // 7. This cycle's telemetry record (pushed at the start of the next cycle).
-  if (telemetry_on_) {
+  // 7. This cycle's telemetry record (pushed at the start of the next cycle), whether or not
+  // a telemetry file is written: the service thread also keeps the poses for the picture.
+  {
     TelemetryRecord& r = pending_;
     r.t_s = static_cast<double>(now) * 1e-9;
     r.x = odo.pose.x;
@@ -279,6 +280,7 @@ void ControlTask::publishStatus(rt::Nanos now) {
   s.w_cmd = last_command_.command.w;
   s.has_goal = has_goal_;
   s.goal = goal_;
+  s.goal_id = goal_id_;
   s.fault = fault_;
   s.base_fault = base_.status.fault;
   s.base_fault_code = base_.status.fault_code;

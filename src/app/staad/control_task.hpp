@@ -11,7 +11,8 @@
 //   4. ControlCycle::step with the planner budget (wall clock or expansions);
 //   5. the command (and the plan's next action, the base thread's fallback) published;
 //   6. the status published;
-//   7. a telemetry record, and log records on state changes and faults.
+//   7. a telemetry record (always: the service thread writes the CSV file and/or keeps the
+//      poses for the run's SVG picture), and log records on state changes and faults.
 // No allocation, no lock, no I/O: everything is sized by the constructor.
 
 #include "app/staad/channels.hpp"
@@ -70,7 +71,6 @@ class ControlTask {
   rt::Nanos odometry_timeout_;
   rt::Nanos obstacles_timeout_;
   PlannerBudget budget_;
-  bool telemetry_on_;
   MotionLimits limits_;
 
   ControlCycle cycle_;
@@ -87,6 +87,7 @@ class ControlTask {
   FaultKind fault_ = FaultKind::kNone;
   bool has_goal_ = false;
   Pose2 goal_;
+  std::uint64_t goal_id_ = 0;  // the goal pursued or last pursued (the service's numbering)
   bool stopped_ = false;   // a stop request (or the daemon stopping) holds the robot
   bool shutdown_ = false;  // the daemon is stopping: requests are ignored
   CycleOutput last_output_;

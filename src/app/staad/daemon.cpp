@@ -110,6 +110,7 @@ void Daemon::createWorkspaces() {
   so.socket_path = config_.socket_path;
   so.socket_mode = config_.socket_mode;
   so.telemetry_path = config_.telemetry_path;
+  so.svg_path = config_.svg_path;
   so.watchdog_interval = watchdog;
   service_ = std::make_unique<Service>(*channels_, *notifier_, so, log_);
   service_->open();
@@ -203,6 +204,7 @@ void Daemon::shutdown() {
                 static_cast<unsigned long long>(rt::realtimeAllocations()));
   say(line);
   for (const Worker* w : {&control_, &base_, &perception_}) reportTiming(*w);
+  service_->writeRunSvg(config_.map, config_.robot.footprint);
   service_->close();
 }
 
@@ -264,6 +266,7 @@ DaemonConfig loadConfig(const DaemonOptions& options) {
   if (options.hal) config.hal = *options.hal;
   if (options.socket_path) config.socket_path = *options.socket_path;
   if (options.telemetry_path) config.telemetry_path = *options.telemetry_path;
+  if (options.svg_path) config.svg_path = *options.svg_path;
   if (config.hal == "socketcan") {
     throw ConfigError("hal socketcan: not built yet (use --hal sim)");
   }

@@ -11,7 +11,8 @@
 //   5. after the control thread's first cycle: the allocation count reset, READY=1.
 //
 // The main thread then runs the service loop. SIGTERM/SIGINT: the control thread brakes and
-// holds; once the robot stands (or 0.6 s passed) STOPPING=1, the threads are joined, exit 0.
+// holds; once the robot stands (or 0.6 s passed) STOPPING=1, the threads are joined, the
+// run's picture is written (with an SVG path), exit 0.
 
 #include "app/staad/config.hpp"
 #include "rt/clock.hpp"
@@ -34,6 +35,7 @@ struct DaemonOptions {
   std::optional<std::string> hal;     // overrides the config's hal
   std::optional<std::string> socket_path;
   std::optional<std::filesystem::path> telemetry_path;
+  std::optional<std::filesystem::path> svg_path;  // overrides telemetry.svg
 };
 
 // config/staad.yaml relative to the current directory if it exists, else

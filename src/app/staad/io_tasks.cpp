@@ -14,7 +14,7 @@ const char* toString(CommandSource source) {
 }
 
 BaseTask::BaseTask(hal::Base& base, Channels& channels, rt::Nanos control_period)
-    : base_(base), ch_(channels), fresh_limit_(control_period * 3 / 2), fallback_limit_(control_period * 5 / 2) {
+    : base_(base), ch_(channels), fresh_limit_(control_period * 2), fallback_limit_(control_period * 3) {
   last_ = brakeCommand(-1);
 }
 

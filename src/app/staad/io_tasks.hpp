@@ -4,8 +4,10 @@
 //
 // BaseTask (base_hz): pose corrections forwarded by the control thread; base.read(now);
 // odometry + status published; the command chosen: the control thread's latest while it is
-// fresh (younger than 1.5 control periods), else its plan's next action (younger than 2.5
-// periods), else a brake; base.write(now, command).
+// fresh (younger than 2 control periods), else its plan's next action (younger than 3
+// periods), else a brake; base.write(now, command). A command is stamped with its cycle's
+// wake-up and published when the cycle ends (up to a period later): while the control thread
+// keeps its deadlines, every command is replaced before it is 2 periods old.
 //
 // PerceptionTask (perception_hz): a new obstacle frame from the sensor is published.
 //
@@ -46,8 +48,8 @@ class BaseTask {
 
   hal::Base& base_;
   Channels& ch_;
-  rt::Nanos fresh_limit_;     // 1.5 control periods
-  rt::Nanos fallback_limit_;  // 2.5 control periods
+  rt::Nanos fresh_limit_;     // 2 control periods
+  rt::Nanos fallback_limit_;  // 3 control periods
   CommandSource source_ = CommandSource::kBrake;
   hal::VelocityCommand last_;
   bool commanded_ = false;  // a control command has been received at all

@@ -1,6 +1,6 @@
 // staad: the STAA* motion controller daemon (docs/staad.md).
 //
-//   staad [--config FILE] [--hal sim|socketcan] [--socket PATH] [--telemetry FILE]
+//   staad [--config FILE] [--hal sim|socketcan] [--socket PATH] [--telemetry FILE] [--svg FILE]
 //
 // Exit status: 0 stopped by SIGTERM/SIGINT, 1 run-time failure (socket busy, a thread could
 // not start), 2 bad config, arguments or environment (the message names the key and value).
@@ -20,10 +20,12 @@ int main(int argc, char** argv) {
     std::string hal;
     std::string socket;
     std::string telemetry;
+    std::string svg;
     app.add_option("--config", config, "daemon config (default: config/staad.yaml, then /etc/staad/staad.yaml)");
     app.add_option("--hal", hal, "hardware: sim (the simulator) or socketcan")->check(CLI::IsMember({"sim", "socketcan"}));
     app.add_option("--socket", socket, "control socket path (overrides socket.path)");
     app.add_option("--telemetry", telemetry, "telemetry CSV file (overrides telemetry.path)");
+    app.add_option("--svg", svg, "a picture of the run written when staad stops (overrides telemetry.svg)");
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -36,6 +38,7 @@ int main(int argc, char** argv) {
     if (!hal.empty()) options.hal = hal;
     if (!socket.empty()) options.socket_path = socket;
     if (!telemetry.empty()) options.telemetry_path = telemetry;
+    if (!svg.empty()) options.svg_path = svg;
     staa::rt::MonotonicClock clock;
     return runDaemon(options, clock, std::cerr);
   } catch (const std::exception& e) {

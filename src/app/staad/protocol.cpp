@@ -219,6 +219,9 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
   j["pose"] = {status.pose.x, status.pose.y, status.pose.theta};
   j["velocity"] = {status.v, status.w};
   j["goal"] = status.has_goal ? Json{status.goal.x, status.goal.y, status.goal.theta} : Json(nullptr);
+  // Which goal `state` is about: a client waiting for its goal ignores "reached" of an older one.
+  j["goal_id"] = status.goal_id;
+  j["queued_goal_id"] = status.queued_goal_id;
   switch (status.fault) {
     case FaultKind::kNone: j["fault"] = nullptr; break;
     case FaultKind::kStaleOdometry:
@@ -256,6 +259,13 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
 }
 
 std::string okReply() { return "{\"ok\":true}\n"; }
+
+std::string goalReply(std::uint64_t goal_id) {
+  OrderedJson j;
+  j["ok"] = true;
+  j["goal_id"] = goal_id;
+  return dumpSafe(j) + "\n";
+}
 
 std::string errorReply(std::string_view message) {
   OrderedJson j;

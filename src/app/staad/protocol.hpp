@@ -2,12 +2,15 @@
 // The control socket's protocol: line-delimited JSON over a Unix stream socket, one request
 // object per line, one reply object per line.
 //
-//   {"cmd": "goal", "x": 3.0, "y": 4.5, "theta": 1.57}  -> {"ok": true}
+//   {"cmd": "goal", "x": 3.0, "y": 4.5, "theta": 1.57}  -> {"ok": true, "goal_id": 1}
 //   {"cmd": "pose", "x": 1.0, "y": 1.0, "theta": 0.0}   -> {"ok": true}   (set / correct the pose)
 //   {"cmd": "stop"}                                     -> {"ok": true}   (brake, drop the goal)
 //   {"cmd": "status"}                                   -> {"ok": true, "status": {...}}
 //   anything else                                       -> {"ok": false, "error": "..."}
 //
+// Each accepted goal gets an id (1, 2, ... in the order the daemon queued them); the status
+// says which goal the robot pursues ("goal_id") and which one was queued last
+// ("queued_goal_id"), so that a client waits for its own goal, never an earlier one.
 // "theta" is optional (0). Lines longer than kMaxRequestBytes are rejected with an error
 // (and the rest of that line discarded). Service thread only (allocates freely).
 
@@ -30,11 +33,12 @@ std::string requestLine(const Request& request);  // the line staactl sends (wit
 
 // The `status --json` object (ARCHITECTURE.md section 6): state, pose [x, y, theta],
 // velocity [v, w], goal ([x, y, theta] or null), fault (null or a reason), cycle {p50_us,
-// p99_us, max_us, overruns, count}, rt_allocations, plus wake-up latency, staleness and the
-// planner's last call.
+// p99_us, max_us, overruns, count}, rt_allocations, plus goal_id and queued_goal_id, wake-up
+// latency, staleness and the planner's last call.
 nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations);
 
 std::string okReply();                             // {"ok":true}\n
+std::string goalReply(std::uint64_t goal_id);      // {"ok":true,"goal_id":N}\n
 std::string errorReply(std::string_view message);  // {"ok":false,"error":...}\n
 std::string statusReply(const Status& status, std::uint64_t rt_allocations);
 }  // namespace staa::staad

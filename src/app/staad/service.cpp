@@ -89,6 +89,15 @@ void Service::open() {
       throw ServiceError(e.what());
     }
   }
+  if (!options_.svg_path.empty()) {
+    try {
+      checkWritable(options_.svg_path);
+    } catch (const std::exception& e) {
+      std::string message = "svg file ";
+      message.append(quoted(options_.svg_path.string())).append(": ").append(e.what());
+      throw ServiceError(message);
+    }
+  }
   openSignalFd();
 }
 
@@ -180,8 +189,12 @@ void Service::setControlTiming(const rt::LatencyHistogram* execution, const rt::
 }
 
 const Status& Service::latest() {
-  if (ch_.status.update()) status_ = ch_.status.readBuffer();
+  if (ch_.status.update()) {
+    status_ = ch_.status.readBuffer();
+    if (!options_.svg_path.empty()) run_.observe(status_);
+  }
   status_.realtime = realtime_;
+  status_.queued_goal_id = last_goal_id_;
   return status_;
 }
 
@@ -353,11 +366,20 @@ void Service::handleLine(Client& c, std::string_view line) {
     c.out.append(errorReply("staad is stopping"));
     return;
   }
-  if (!ch_.requests.push(request)) {
+  // A goal's id is given as it is queued: a refused goal takes none.
+  Request queued = request;
+  if (queued.kind == RequestKind::kGoal) queued.goal_id = last_goal_id_ + 1;
+  if (!ch_.requests.push(queued)) {
     c.out.append(errorReply("busy: the control thread is not taking requests, try again"));
     return;
   }
-  c.out.append(okReply());
+  if (queued.kind != RequestKind::kGoal) {
+    c.out.append(okReply());
+    return;
+  }
+  last_goal_id_ = queued.goal_id;
+  if (!options_.svg_path.empty()) run_.addGoal(queued.goal_id, queued.pose);
+  c.out.append(goalReply(queued.goal_id));
 }
 
 void Service::flushClient(Client& c) {
@@ -409,7 +431,9 @@ void Service::drainLogs() {
 void Service::drainTelemetry() {
   TelemetryRecord r;
   bool wrote = false;
+  const bool keep_run = !options_.svg_path.empty();
   while (ch_.telemetry.pop(r)) {
+    if (keep_run) run_.addPose(r.t_s, Pose2{r.x, r.y, r.theta});
     if (telemetry_.isOpen()) {
       telemetry_.write(r);
       wrote = true;
@@ -489,6 +513,21 @@ void Service::close() {
   }
   telemetry_.flush();
   telemetry_.close();
+}
+
+void Service::writeRunSvg(const PolygonMap& map, const Polygon& footprint) {
+  if (options_.svg_path.empty()) return;
+  const std::string path = options_.svg_path.string();
+  try {
+    writeFileAtomically(options_.svg_path, runSvg(run_, map, footprint));
+  } catch (const std::exception& e) {
+    info("svg: the run's picture was not written: " + std::string(e.what()));
+    return;
+  }
+  char line[200];
+  std::snprintf(line, sizeof line, "%.1f s, %.2f m driven, %zu of %zu goals reached", run_.durationS(),
+                run_.distanceM(), run_.goalsReached(), run_.goals().size());
+  info("svg: wrote the run's picture to " + path + " (" + line + ")");
 }
 
 }  // namespace staa::staad

@@ -8,11 +8,15 @@
 // client has its own line buffer of at most kMaxRequestBytes; a longer line gets an error
 // reply and is discarded up to its newline, the client stays connected. Goal, stop and pose
 // requests go to the control thread through the request ring; status is answered here from
-// the latest Status snapshot.
+// the latest Status snapshot. Goals are numbered here (1, 2, ...) as they are queued.
+//
+// With an SVG path (`--svg`, telemetry.svg) the service keeps the run as it goes (the poses of
+// the telemetry records, decimated; the goals it queued) and draws it when staad stops.
 //
 // The OS calls of the daemon (sockets, poll, signalfd) live in service.cpp only.
 
 #include "app/staad/channels.hpp"
+#include "app/staad/run_picture.hpp"
 #include "rt/sd_notify.hpp"
 #include "rt/timing_stats.hpp"
 
@@ -44,6 +48,7 @@ struct ServiceOptions {
   std::string socket_path;
   unsigned socket_mode = 0660;
   std::filesystem::path telemetry_path;  // empty: off
+  std::filesystem::path svg_path;        // the run's picture at shutdown; empty: off
   std::optional<rt::Nanos> watchdog_interval;  // rt::Notifier::watchdogInterval()
 };
 
@@ -82,6 +87,10 @@ class Service {
   void stopping();
   // Closes the clients and the socket (unlinks its file) and the telemetry file.
   void close();
+  // With an SVG path: draws the run over `map` with the robot's `footprint` and writes it
+  // atomically; logs what it wrote, or why it could not (staad's exit code stays 0). Call
+  // after the threads ended and drain() took the last records.
+  void writeRunSvg(const PolygonMap& map, const Polygon& footprint);
 
   const std::string& socketPath() const { return options_.socket_path; }
   std::uint64_t watchdogPings() const { return watchdog_pings_; }
@@ -136,6 +145,8 @@ class Service {
   bool withheld_logged_ = false;
   std::string last_status_text_;
   std::uint64_t telemetry_dropped_seen_ = 0;
+  std::uint64_t last_goal_id_ = 0;  // the newest goal queued (ids start at 1)
+  RunRecord run_;                   // kept only with an SVG path
 };
 
 }  // namespace staa::staad

@@ -30,6 +30,9 @@ struct Status {
   double v_cmd = 0.0, w_cmd = 0.0;    // commanded
   bool has_goal = false;
   Pose2 goal;
+  // The id of the goal the control thread pursues or last pursued (0: none yet). Ids are
+  // given by the service thread as it queues goal requests: 1, 2, ... (never reused).
+  std::uint64_t goal_id = 0;
   FaultKind fault = FaultKind::kNone;
   hal::BaseFault base_fault = hal::BaseFault::kNone;
   std::uint32_t base_fault_code = 0;
@@ -46,6 +49,10 @@ struct Status {
   double depth = 0.0;
   bool realtime = false;  // the control thread runs under SCHED_FIFO
   double time_s = 0.0;    // monotonic time of the snapshot
+  // Set by the service thread, not the control thread: the id of the newest goal it queued
+  // (0: none yet). It runs ahead of goal_id until the control thread takes that goal (within
+  // one control period), so a client that just sent a goal knows which id to wait for.
+  std::uint64_t queued_goal_id = 0;
 };
 
 enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus };
@@ -55,6 +62,9 @@ const char* toString(RequestKind kind);  // "goal", "stop", "pose", "status"
 struct Request {
   RequestKind kind = RequestKind::kStatus;
   Pose2 pose;  // goal or pose
+  // A goal's id, given by the service thread as it queues the goal (1, 2, ...); never on the
+  // wire from a client.
+  std::uint64_t goal_id = 0;
 };
 
 }  // namespace staa::staad

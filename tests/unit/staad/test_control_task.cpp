@@ -7,6 +7,7 @@
 #include "app/staad/config.hpp"
 #include "app/staad/control_task.hpp"
 #include "app/staad/io_tasks.hpp"
+#include "app/staad/run_picture.hpp"
 #include "app/staad/telemetry.hpp"
 #include "hal/mock/mock_hal.hpp"
 #include "map/polygon_map.hpp"
@@ -19,7 +20,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
+
+#include <unistd.h>
 
 namespace staa::staad {
 namespace {
@@ -94,10 +100,11 @@ class Lockstep {
     return max;
   }
 
-  void request(RequestKind kind, const Pose2& pose = {}) {
+  void request(RequestKind kind, const Pose2& pose = {}, std::uint64_t goal_id = 0) {
     Request r;
     r.kind = kind;
     r.pose = pose;
+    r.goal_id = goal_id;
     ASSERT_TRUE(ch.requests.push(r));
   }
 
@@ -351,6 +358,64 @@ TEST(ControlTask, ShutdownBrakesAndIgnoresLaterGoals) {
   EXPECT_FALSE(ls.status().has_goal);
 }
 
+TEST(ControlTask, StatusCarriesTheIdOfTheGoalPursuedInTheOrderTheGoalsCame) {
+  Lockstep ls(officeConfig());
+  ls.steps(2);
+  EXPECT_EQ(ls.status().goal_id, 0u);  // no goal yet
+
+  ls.request(RequestKind::kGoal, kGoal, 1);
+  ls.step();
+  Status s = ls.status();
+  EXPECT_EQ(s.goal_id, 1u);
+  EXPECT_EQ(s.state, DaemonState::kDriving);
+  EXPECT_DOUBLE_EQ(s.goal.x, kGoal.x);
+
+  ls.stepUntil([&] { return ls.task.state() == DaemonState::kReached; }, 600);
+  ASSERT_EQ(ls.task.state(), DaemonState::kReached);
+  EXPECT_EQ(ls.status().goal_id, 1u);  // reached: about goal 1
+
+  // The next goal: its id with its first cycle, never goal 1's "reached" under id 2.
+  ls.request(RequestKind::kGoal, kGoal2, 2);
+  ls.step();
+  s = ls.status();
+  EXPECT_EQ(s.goal_id, 2u);
+  EXPECT_EQ(s.state, DaemonState::kDriving);
+  EXPECT_DOUBLE_EQ(s.goal.x, kGoal2.x);
+
+  // A stop drops the goal: the id stays the last one pursued.
+  ls.request(RequestKind::kStop);
+  ls.step();
+  s = ls.status();
+  EXPECT_EQ(s.state, DaemonState::kStopped);
+  EXPECT_FALSE(s.has_goal);
+  EXPECT_EQ(s.goal_id, 2u);
+
+  // Two goals within one period: the later one is pursued.
+  ls.request(RequestKind::kGoal, kGoal, 3);
+  ls.request(RequestKind::kGoal, kGoal2, 4);
+  ls.step();
+  s = ls.status();
+  EXPECT_EQ(s.goal_id, 4u);
+  EXPECT_DOUBLE_EQ(s.goal.x, kGoal2.x);
+  ls.request(RequestKind::kPose, Pose2{5.0, 4.5, 0.0});  // not a goal: the id stays
+  ls.step();
+  EXPECT_EQ(ls.status().goal_id, 4u);
+  ls.request(RequestKind::kGoal, kGoal, 5);
+  ls.step();
+  EXPECT_EQ(ls.status().goal_id, 5u);
+}
+
+TEST(ControlTask, PushesATelemetryRecordEveryCycleEvenWithoutATelemetryFile) {
+  DaemonConfig config = officeConfig();
+  config.telemetry_path.clear();  // no CSV: the service still keeps the poses for the picture
+  Lockstep ls(config);
+  ls.request(RequestKind::kGoal, kGoal, 1);
+  ls.steps(30);
+  EXPECT_EQ(ls.telemetry_records + 1, ls.task.cycles());
+  EXPECT_NEAR(ls.last_telemetry.x, ls.base.odometry().pose.x, 0.1);
+  EXPECT_GT(ls.last_telemetry.x, kStart.x);  // it drove
+}
+
 TEST(ControlTask, PoseRequestReachesTheBaseThroughTheControlThread) {
   Lockstep ls(officeConfig());
   ls.steps(2);
@@ -377,7 +442,7 @@ TEST(BaseTask, FallsBackToThePlansNextActionThenBrakesWhenControlFallsSilent) {
   const CommandSlot slot = ls.task.lastCommand();
 
   ls.control_paused = true;
-  // Base ticks after the last command: < 1.5 periods: the command; < 2.5: the plan's next
+  // Base ticks after the last command: < 2 periods: the command; < 3: the plan's next
   // action; after that a brake.
   bool saw_next = false;
   for (int i = 0; i < 12; ++i) {
@@ -385,10 +450,10 @@ TEST(BaseTask, FallsBackToThePlansNextActionThenBrakesWhenControlFallsSilent) {
     ls.base_task.cycle(t);
     ls.next_base += Lockstep::kBasePeriod;
     const rt::Nanos age = t - slot.command.stamp;
-    if (age < ls.control_period * 3 / 2) {
+    if (age < ls.control_period * 2) {
       EXPECT_EQ(ls.base_task.source(), CommandSource::kControl) << age;
       EXPECT_DOUBLE_EQ(ls.base_task.lastCommand().v, slot.command.v);
-    } else if (age < ls.control_period * 5 / 2) {
+    } else if (age < ls.control_period * 3) {
       EXPECT_EQ(ls.base_task.source(), CommandSource::kPlanNext) << age;
       EXPECT_DOUBLE_EQ(ls.base_task.lastCommand().v, slot.next.v);
       saw_next = true;
@@ -434,7 +499,7 @@ TEST(ControlTask, ThousandCyclesWithGoalChangesAndAStopAllocateNothing) {
   int reached = 0;
   for (int k = 0; k < 1000; ++k) {
     // Goal changes and a stop happen in the real-time thread too.
-    if (k == 150) ls.request(RequestKind::kGoal, kGoal2);
+    if (k == 150) ls.request(RequestKind::kGoal, kGoal2, 2);
     if (k == 400) ls.request(RequestKind::kStop);
     if (k == 450) ls.request(RequestKind::kGoal, kGoal);
     if (k == 700) ls.request(RequestKind::kPose, Pose2{5.0, 4.5, 0.0});
@@ -482,6 +547,94 @@ TEST(Telemetry, RingRoundsUpDropsWhenFullAndKeepsOrder) {
     EXPECT_EQ(r.expansions, i);
   }
   EXPECT_FALSE(ring.pop(r));
+}
+
+// The run's picture (staad --svg): what the service thread keeps of the run, and the drawing.
+TEST(RunPicture, KeepsOnePointPer5CmOfTravelAndBreaksThePathAtAPoseCorrection) {
+  RunRecord run;
+  // 1 m along x in 1 cm steps, 100 Hz: 101 records.
+  for (int k = 0; k <= 100; ++k) run.addPose(10.0 + 0.01 * k, Pose2{1.0 + 0.01 * k, 2.0, 0.0});
+  ASSERT_EQ(run.path().size(), 1u);
+  const std::size_t points = run.path()[0].size();
+  EXPECT_GE(points, 20u);
+  EXPECT_LE(points, 22u);  // one per 5 cm, plus the start and the end pose
+  EXPECT_NEAR(run.distanceM(), 1.0, 1e-9);
+  EXPECT_NEAR(run.path()[0].back().x(), 2.0, 1e-12);  // ends at the end pose
+
+  // `staactl pose`: 3 m away within one cycle. A new polyline; no distance for the jump.
+  run.addPose(11.033, Pose2{5.0, 2.0, 1.0});
+  run.addPose(11.066, Pose2{5.02, 2.0, 1.0});
+  const auto path = run.path();
+  ASSERT_EQ(path.size(), 2u);
+  EXPECT_NEAR(path[0].back().x(), 2.0, 1e-12);
+  EXPECT_NEAR(path[1].front().x(), 5.0, 1e-12);
+  EXPECT_NEAR(path[1].back().x(), 5.02, 1e-12);
+  EXPECT_NEAR(run.distanceM(), 1.02, 1e-9);
+  EXPECT_NEAR(run.durationS(), 1.066, 1e-9);
+  EXPECT_EQ(run.records(), 103u);
+  EXPECT_DOUBLE_EQ(run.endPose().theta, 1.0);
+
+  // A long gap (records dropped when the ring was full) is travel, not a relocation.
+  run.addPose(20.0, Pose2{7.0, 2.0, 0.0});
+  EXPECT_EQ(run.path().size(), 2u);
+  EXPECT_NEAR(run.distanceM(), 3.0, 1e-9);
+}
+
+TEST(RunPicture, CountsEachGoalReachedOnceByItsId) {
+  RunRecord run;
+  run.addGoal(1, Pose2{8.5, 4.5, 0.0});
+  run.addGoal(2, Pose2{7.0, 4.0, 3.14});
+  Status s;
+  s.goal_id = 1;
+  s.state = DaemonState::kDriving;
+  run.observe(s);
+  EXPECT_EQ(run.goalsReached(), 0u);
+  s.state = DaemonState::kReached;
+  for (int k = 0; k < 3; ++k) run.observe(s);  // every 10 ms while it stays reached
+  EXPECT_EQ(run.goalsReached(), 1u);
+  s.goal_id = 2;
+  s.state = DaemonState::kUnreachable;
+  run.observe(s);
+  EXPECT_EQ(run.goalsReached(), 1u);
+  ASSERT_EQ(run.goals().size(), 2u);
+  EXPECT_TRUE(run.goals()[0].reached);
+  EXPECT_FALSE(run.goals()[1].reached);
+}
+
+TEST(RunPicture, DrawsTheMapThePathTheGoalsAndTheRobotAndWritesAtomically) {
+  const DaemonConfig c = officeConfig();
+  RunRecord run;
+  for (int k = 0; k <= 120; ++k) run.addPose(0.033 * k, Pose2{4.5 + 0.033 * k, 4.5, 0.0});
+  run.addGoal(1, Pose2{8.5, 4.5, 0.0});
+  run.addGoal(2, Pose2{1.5, 1.5, 0.0});  // in a solid block: never reached
+  Status s;
+  s.goal_id = 1;
+  s.state = DaemonState::kReached;
+  run.observe(s);
+  const std::string doc = runSvg(run, c.map, c.robot.footprint);
+  EXPECT_EQ(doc.rfind("<?xml", 0), 0u);
+  EXPECT_NE(doc.find("<svg"), std::string::npos);
+  EXPECT_NE(doc.find("</svg>"), std::string::npos);
+  EXPECT_NE(doc.find("<polyline fill=\"none\" stroke=\"#e8590c\""), std::string::npos);
+  EXPECT_NE(doc.find(">1</text>"), std::string::npos);
+  EXPECT_NE(doc.find(">2</text>"), std::string::npos);
+  EXPECT_NE(doc.find("staad run on office: 4.0 s, 3.96 m driven, 1 of 2 goals reached"), std::string::npos);
+  EXPECT_NE(doc.find("robot at the end"), std::string::npos);
+
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("run-picture-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path file = dir / "run.svg";
+  std::ofstream(file) << "old";
+  writeFileAtomically(file, doc);
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), doc);
+  EXPECT_FALSE(std::filesystem::exists(dir / "run.svg.tmp"));
+  EXPECT_NO_THROW(checkWritable(file));
+  EXPECT_THROW(checkWritable(dir / "missing" / "run.svg"), std::runtime_error);
+  EXPECT_THROW(writeFileAtomically(dir / "missing" / "run.svg", doc), std::runtime_error);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

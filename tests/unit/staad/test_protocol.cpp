@@ -144,6 +144,8 @@ Status filledStatus() {
   s.w_cmd = -0.05;
   s.has_goal = true;
   s.goal = {12.0, 4.5, 1.57};
+  s.goal_id = 41;
+  s.queued_goal_id = 42;
   s.cycles = 12345;
   s.cycle_p50_us = 850.0;
   s.cycle_p99_us = 4100.0;
@@ -195,6 +197,42 @@ TEST(Protocol, StatusJsonHasEveryContractKeyWithItsValue) {
   EXPECT_EQ(j["planner"]["depth"], 7.5);
   EXPECT_EQ(j["realtime"], true);
   EXPECT_EQ(j["time_s"], 321.5);
+  EXPECT_EQ(j["goal_id"], 41);
+  EXPECT_EQ(j["queued_goal_id"], 42);
+}
+
+TEST(Protocol, GoalReplyCarriesTheGoalsId) {
+  EXPECT_EQ(goalReply(1), "{\"ok\":true,\"goal_id\":1}\n");
+  const std::string reply = goalReply(std::numeric_limits<std::uint64_t>::max());
+  EXPECT_EQ(reply.find('\n'), reply.size() - 1);
+  const Json j = Json::parse(reply);
+  EXPECT_EQ(j["ok"], true);
+  ASSERT_TRUE(j["goal_id"].is_number_unsigned());
+  EXPECT_EQ(j["goal_id"].get<std::uint64_t>(), std::numeric_limits<std::uint64_t>::max());  // exact, not a double
+}
+
+TEST(Protocol, StatusJsonSaysWhichGoalItsStateIsAbout) {
+  Status s = filledStatus();
+  s.state = DaemonState::kReached;
+  s.goal_id = 7;
+  s.queued_goal_id = 8;  // queued, not taken by the control thread yet
+  const Json j = statusJson(s, 0);
+  EXPECT_EQ(j["state"], "reached");
+  ASSERT_TRUE(j["goal_id"].is_number_unsigned());
+  EXPECT_EQ(j["goal_id"].get<std::uint64_t>(), 7u);
+  EXPECT_EQ(j["queued_goal_id"].get<std::uint64_t>(), 8u);
+  // Before any goal: 0, never null (a client compares ids as numbers).
+  const Json idle = statusJson(Status{}, 0);
+  EXPECT_EQ(idle["goal_id"], 0);
+  EXPECT_EQ(idle["queued_goal_id"], 0);
+}
+
+TEST(Protocol, GoalIdsAreTheDaemonsNeverTheClients) {
+  Request r{RequestKind::kGoal, {1.0, 2.0, 0.0}};
+  r.goal_id = 5;
+  EXPECT_EQ(requestLine(r).find("goal_id"), std::string::npos) << requestLine(r);
+  EXPECT_EQ(parsedOk(requestLine(r)).goal_id, 0u);
+  EXPECT_THAT(parsedError(R"({"cmd":"goal","x":1,"y":2,"goal_id":3})"), HasSubstr("unknown key \"goal_id\""));
 }
 
 TEST(Protocol, StatusJsonGoalIsNullWithoutAGoalAndEveryStateHasItsName) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -190,11 +191,16 @@ class Staactl : public ::testing::Test {
     return r;
   }
 
-  static std::string statusWith(const char* state) {
+  // A status reply in `state` about goal `goal_id`, with `queued_goal_id` the newest goal
+  // the daemon queued (0: as goal_id).
+  static std::string statusWith(const char* state, std::uint64_t goal_id = 0, std::uint64_t queued_goal_id = 0) {
     Status s;
+    s.goal_id = goal_id;
+    s.queued_goal_id = std::max(goal_id, queued_goal_id);
     s.state = state == std::string("driving") ? DaemonState::kDriving
               : state == std::string("reached") ? DaemonState::kReached
               : state == std::string("unreachable") ? DaemonState::kUnreachable
+              : state == std::string("stopped")     ? DaemonState::kStopped
                                                     : DaemonState::kIdle;
     s.has_goal = true;
     s.goal = {12.0, 4.5, 1.57};
@@ -208,14 +214,80 @@ class Staactl : public ::testing::Test {
 
 std::string line(const Request& r) { return requestLine(r); }
 
-TEST_F(Staactl, GoalSendsTheRequestAndPrintsOk) {
-  FakeStaad staad(socket_, {okReply()});
+TEST_F(Staactl, GoalSendsTheRequestAndPrintsTheGoalsId) {
+  FakeStaad staad(socket_, {goalReply(7)});
   const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "1.57"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out, "ok\n");
+  EXPECT_EQ(r.out, "ok (goal 7)\n");
   EXPECT_EQ(r.err, "");
   ASSERT_EQ(staad.requests().size(), 1u);
   EXPECT_EQ(staad.requests()[0], line({RequestKind::kGoal, {3.0, 4.5, 1.57}}));
+}
+
+TEST_F(Staactl, GoalWithoutAnIdFromAnOlderStaadPrintsOkButCannotWait) {
+  FakeStaad staad(socket_, {okReply()});
+  const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "ok\n");
+  const CtlRun w = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "--wait"});
+  EXPECT_EQ(w.exit_code, 1);
+  EXPECT_THAT(w.err, HasSubstr("did not give the goal an id"));
+  EXPECT_EQ(staad.requests().size(), 2u);  // no status polled
+}
+
+// The race this guards against: the status read right after the goal was queued still shows
+// the previous goal's "reached" (the control thread takes the new goal within one period).
+TEST_F(Staactl, GoalWaitIgnoresThePreviousGoalsReachedAndEndsOnItsOwn) {
+  FakeStaad staad(socket_, {goalReply(2), statusWith("reached", 1, 2), statusWith("reached", 1, 2),
+                            statusWith("driving", 2), statusWith("reached", 2)});
+  const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "--wait"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "ok (goal 2)\nreached\n");
+  const auto got = staad.requests();
+  ASSERT_EQ(got.size(), 5u) << "returned before the status about goal 2 said reached";
+  EXPECT_EQ(got[0], line({RequestKind::kGoal, {3.0, 4.5, 0.0}}));
+  for (std::size_t k = 1; k < got.size(); ++k) EXPECT_EQ(got[k], "{\"cmd\":\"status\"}\n");
+}
+
+TEST_F(Staactl, GoalWaitTimesOutWhileOnlyThePreviousGoalIsReached) {
+  FakeStaad staad(socket_, {goalReply(2), statusWith("reached", 1, 2)});
+  const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "--wait", "--timeout", "0.3"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_EQ(r.out, "ok (goal 2)\n");
+  EXPECT_THAT(r.err, HasSubstr("goal: timed out after 0.3 s waiting for goal 2 to be reached (state reached for goal 1, "));
+}
+
+TEST_F(Staactl, GoalWaitFailsWhenItsOwnGoalIsUnreachableStoppedOrReplaced) {
+  {
+    // The previous goal's unreachable does not count; its own does.
+    FakeStaad staad(socket_, {goalReply(3), statusWith("unreachable", 2, 3), statusWith("unreachable", 3)});
+    const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "--wait"});
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_THAT(r.err, HasSubstr("goal 3 is unreachable"));
+    EXPECT_EQ(staad.requests().size(), 3u);
+  }
+  fs::remove(socket_);
+  {
+    FakeStaad staad(socket_, {goalReply(3), statusWith("driving", 3), statusWith("stopped", 3)});
+    const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "--wait"});
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_THAT(r.err, HasSubstr("goal 3 was dropped"));
+  }
+  fs::remove(socket_);
+  {
+    FakeStaad staad(socket_, {goalReply(3), statusWith("driving", 3), statusWith("reached", 4)});
+    const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "--wait"});
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_THAT(r.err, HasSubstr("goal 3 was replaced by goal 4"));
+  }
+}
+
+TEST_F(Staactl, GoalWaitShowsProgressWithTheDistanceToTheGoal) {
+  FakeStaad staad(socket_, {goalReply(1), statusWith("driving", 1)});  // the robot at (0, 0)
+  const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4", "--wait", "--timeout", "1.5"});
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_THAT(r.err, HasSubstr("staactl: waiting for goal 1 to be reached: driving at (0.00, 0.00), 5.00 m to the goal, "
+                               "fault none, 1 s\n"));
 }
 
 TEST_F(Staactl, PoseAndStopSendTheirRequests) {
@@ -341,6 +413,8 @@ TEST_F(Staactl, BadArgumentsExitTwoNamingTheValue) {
       {{"wait", "--timeout", "soon"}, "wait: --timeout: expected seconds (a finite number > 0), got 'soon'"},
       {{"wait", "--timeout", "-1"}, "got '-1'"},
       {{"wait", "--state", "arrived"}, "wait: --state: expected idle, driving, reached, unreachable, stopped or fault, got 'arrived'"},
+      {{"goal", "1", "2", "--timeout", "5"}, "goal: --timeout: only with --wait"},
+      {{"goal", "1", "2", "--wait", "--timeout", "0"}, "goal: --timeout: expected seconds (a finite number > 0), got '0'"},
   };
   for (const Bad& b : cases) {
     std::vector<std::string> args = {"--socket", socket_.string()};
@@ -364,6 +438,16 @@ TEST_F(Staactl, WaitPollsUntilReached) {
   const auto got = staad.requests();
   ASSERT_EQ(got.size(), 3u);
   for (const auto& g : got) EXPECT_EQ(g, "{\"cmd\":\"status\"}\n");
+}
+
+TEST_F(Staactl, WaitIgnoresReachedOfAGoalOlderThanTheNewestQueued) {
+  // `staactl goal` just queued goal 2; the control thread still reports goal 1 reached.
+  FakeStaad staad(socket_, {statusWith("reached", 1, 2), statusWith("unreachable", 1, 2), statusWith("driving", 2),
+                            statusWith("reached", 2)});
+  const CtlRun r = ctl({"--socket", socket_.string(), "wait"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "reached\n");
+  EXPECT_EQ(staad.requests().size(), 4u);
 }
 
 TEST_F(Staactl, WaitForAnotherStateAndUnreachableAndTimeout) {

@@ -60,6 +60,7 @@ goal:
 telemetry:
   path: ""
   records: 4096
+  svg: ""
 memory:
   heap_prefault_mb: 64
   stack_prefault_kb: 256
@@ -162,6 +163,7 @@ TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
   EXPECT_DOUBLE_EQ(c.obstacles_timeout_s, 0.2);
   EXPECT_TRUE(c.telemetry_path.empty());
   EXPECT_EQ(c.telemetry_records, 4096u);
+  EXPECT_TRUE(c.svg_path.empty());
   EXPECT_EQ(c.heap_prefault_bytes, std::size_t{64} << 20);
   EXPECT_EQ(c.stack_prefault_bytes, std::size_t{256} << 10);
   EXPECT_DOUBLE_EQ(c.control.rate_hz, 30.0);
@@ -178,6 +180,17 @@ TEST_F(ConfigFiles, ReadsEveryKeyOfAValidConfig) {
   EXPECT_DOUBLE_EQ(c.sim.sensor_range_m, 6.0);
   EXPECT_EQ(c.base_thread.cpu, 0);
   EXPECT_EQ(c.perception_thread.priority, 0);
+  EXPECT_TRUE(c.svg_path.empty());  // "": off
+}
+
+TEST_F(ConfigFiles, TelemetrySvgIsAPathOrEmptyForOff) {
+  const DaemonConfig on = loadDaemonConfig(write("staad.yaml", edited("svg: \"\"", "svg: /var/log/staad/run.svg")));
+  EXPECT_EQ(on.svg_path, fs::path("/var/log/staad/run.svg"));
+  EXPECT_TRUE(on.telemetry_path.empty());  // independent of the CSV file
+  const DaemonConfig null = loadDaemonConfig(write("null.yaml", edited("svg: \"\"", "svg:")));
+  EXPECT_TRUE(null.svg_path.empty());
+  const DaemonConfig absent = loadDaemonConfig(write("absent.yaml", edited("  svg: \"\"\n", "")));
+  EXPECT_TRUE(absent.svg_path.empty());
 }
 
 // The bad value, the key that holds it and its line must all be in the message.
@@ -216,6 +229,8 @@ TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
       {"records: 4096", "records: 8", {"telemetry.records", "16..", "8"}},
       {"records: 4096", "records: many", {"telemetry.records", "many"}},
       {"path: \"\"", "path: [a, b]", {"telemetry.path", "a list of 2 items"}},
+      {"svg: \"\"", "svg: [a, b]", {"telemetry.svg", "a file path", "a list of 2 items"}},
+      {"svg: \"\"", "svgg: run.svg", {"telemetry.svgg", "unknown key", "path, records, svg"}},
       {"heap_prefault_mb: 64", "heap_prefault_mb: 5000", {"memory.heap_prefault_mb", "0..4096", "5000"}},
       {"stack_prefault_kb: 256", "stack_prefault_kb: -4", {"memory.stack_prefault_kb", "-4"}},
       {"hal: sim", "hal: can", {"hal", "sim or socketcan", "'can'"}},
@@ -344,6 +359,7 @@ TEST_F(ConfigFiles, RelativePathsResolveAgainstTheConfigsDirectory) {
   text.replace(text.find("map: maps/office.yaml"), 21, "map: " + (dir_ / "maps/office.yaml").string());
   text.replace(text.find("path: /run/staad/staad.sock"), 27, "path: run/staad.sock");
   text.replace(text.find("path: \"\""), 8, "path: logs/telemetry.bin");
+  text.replace(text.find("svg: \"\""), 7, "svg: pictures/run.svg");
   const fs::path file = write("etc/staad.yaml", text);
   // Started from another directory (systemd starts staad in /): the config's own folder counts.
   const fs::path cwd = fs::current_path();
@@ -355,6 +371,7 @@ TEST_F(ConfigFiles, RelativePathsResolveAgainstTheConfigsDirectory) {
   EXPECT_EQ(c.map_file, dir_ / "maps/office.yaml");  // absolute: kept
   EXPECT_EQ(c.socket_path, (dir_ / "etc/run/staad.sock").string());
   EXPECT_EQ(c.telemetry_path, dir_ / "etc/logs/telemetry.bin");
+  EXPECT_EQ(c.svg_path, dir_ / "etc/pictures/run.svg");
   EXPECT_EQ(c.robot.name, "hsr");
 }
 

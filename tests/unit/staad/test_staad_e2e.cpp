@@ -5,6 +5,8 @@
 // socket gets error replies while the daemon keeps answering; several clients at once; a
 // second daemon on the same socket is refused; SIGTERM while driving gives STOPPING=1 and
 // exit 0 within one second; bad or missing config exits 2 naming the key or the path.
+// `staactl goal --wait` (and `goal` then `wait`) end only once the robot is at the new goal,
+// even right after the previous one was reached; `--svg FILE` leaves a picture of the run.
 //
 // Every wait has a timeout, and every process this test starts is killed in teardown.
 #include "shared_dir.hpp"
@@ -12,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -292,7 +295,9 @@ class StaadE2E : public ::testing::Test {
     fs::remove_all(dir_, ec);
   }
 
-  std::string config(const std::string& rates = "{control_hz: 30, base_hz: 100, perception_hz: 30}") const {
+  // `telemetry`: the telemetry section's value; empty: the CSV file telemetry_.
+  std::string config(const std::string& rates = "{control_hz: 30, base_hz: 100, perception_hz: 30}",
+                     const std::string& telemetry = "") const {
     const fs::path src = staa::test::sourceDir();
     std::string y;
     y += "format: staad-config/1\n";
@@ -309,7 +314,7 @@ class StaadE2E : public ::testing::Test {
     y += "socket: {path: " + socket_.string() + ", mode: \"0660\"}\n";
     y += "limits: {odometry_timeout_s: 0.1, obstacles_timeout_s: 0.2}\n";
     y += "goal: {tolerance_m: 0.2, heading_tolerance: 0.4}\n";
-    y += "telemetry: {path: " + telemetry_.string() + ", records: 4096}\n";
+    y += "telemetry: " + (telemetry.empty() ? "{path: " + telemetry_.string() + ", records: 4096}" : telemetry) + "\n";
     y += "memory: {heap_prefault_mb: 16, stack_prefault_kb: 256}\n";
     return y;
   }
@@ -319,21 +324,35 @@ class StaadE2E : public ::testing::Test {
     return p;
   }
 
-  Child startDaemon(const fs::path& config_file, const std::vector<std::string>& extra_env, const std::string& tag) {
+  Child startDaemon(const fs::path& config_file, const std::vector<std::string>& extra_env, const std::string& tag,
+                    const std::vector<std::string>& extra_args = {}) {
     std::vector<std::string> env = environmentWithout({"NOTIFY_SOCKET=", "WATCHDOG_USEC=", "WATCHDOG_PID="});
     env.insert(env.end(), extra_env.begin(), extra_env.end());
-    return Child({STAAD_EXE, "--config", config_file.string(), "--hal", "sim"}, env, dir_ / (tag + ".out"),
-                 dir_ / (tag + ".err"));
+    std::vector<std::string> argv{STAAD_EXE, "--config", config_file.string(), "--hal", "sim"};
+    argv.insert(argv.end(), extra_args.begin(), extra_args.end());
+    return Child(argv, env, dir_ / (tag + ".out"), dir_ / (tag + ".err"));
   }
 
-  // Runs staactl with a timeout; the exit code (nullopt: did not finish) and its stdout.
-  std::pair<std::optional<int>, std::string> staactl(const std::vector<std::string>& args) {
+  // Runs staactl with a timeout; the exit code (nullopt: did not finish) and its stdout (its
+  // stderr is left in staactl.err).
+  std::pair<std::optional<int>, std::string> staactl(const std::vector<std::string>& args,
+                                                      milliseconds timeout = milliseconds(10'000)) {
     std::vector<std::string> argv{STAACTL_EXE, "--socket", socket_.string()};
     argv.insert(argv.end(), args.begin(), args.end());
     const fs::path out = dir_ / "staactl.out";
     Child c(argv, environmentWithout({"NOTIFY_SOCKET="}), out, dir_ / "staactl.err");
-    const std::optional<int> code = c.wait(milliseconds(10'000));
+    const std::optional<int> code = c.wait(timeout);
     return {code, readFile(out)};
+  }
+
+  // Waits until the daemon answers status (it is up), or fails after 10 s.
+  bool answering() {
+    return pollStatus([](const nlohmann::json&) { return true; }, milliseconds(10'000)).has_value();
+  }
+
+  static double distance(const nlohmann::json& status, double x, double y) {
+    const auto& pose = status["pose"];
+    return std::hypot(pose[0].get<double>() - x, pose[1].get<double>() - y);
   }
 
   std::optional<nlohmann::json> status() {
@@ -392,6 +411,7 @@ TEST_F(StaadE2E, ReadyWatchdogDrivesToTheGoalSurvivesGarbageAndStopsOnSigterm) {
     const auto [code, out] = staactl({"goal", "10.5", "4.5", "0"});
     ASSERT_TRUE(code.has_value());
     EXPECT_EQ(*code, 0) << out;
+    EXPECT_EQ(out, "ok (goal 1)\n");
   }
   const auto goal_sent = Clock::now();
   const auto reached = pollStatus([](const nlohmann::json& j) { return j["state"] == "reached"; }, milliseconds(30'000));
@@ -505,6 +525,119 @@ TEST_F(StaadE2E, ReadyWatchdogDrivesToTheGoalSurvivesGarbageAndStopsOnSigterm) {
   }
   EXPECT_GT(rows, 60);
   EXPECT_GT(max_x, 10.0);  // the trip is in it
+}
+
+// The race `goal --wait` and `wait` guard against: right after a goal was reached, the next
+// goal's first status reads still say "reached" (about the previous goal) until the control
+// thread takes the new one. Each wait must end only once the robot is at its new goal.
+TEST_F(StaadE2E, GoalWaitAndWaitEndOnlyAtTheNewGoalRightAfterThePreviousWasReached) {
+  daemon_ = startDaemon(writeConfig(config()), {}, "staad");
+  ASSERT_TRUE(answering());
+  constexpr milliseconds kTrip(90'000);
+
+  {
+    const auto [code, out] = staactl({"goal", "10.5", "4.5", "0", "--wait", "--timeout", "60"}, kTrip);
+    ASSERT_TRUE(code.has_value()) << "goal --wait did not return";
+    EXPECT_EQ(*code, 0) << out << readFile(dir_ / "staactl.err");
+    EXPECT_EQ(out, "ok (goal 1)\nreached\n");
+  }
+  const auto first = status();
+  ASSERT_TRUE(first.has_value());
+  EXPECT_EQ((*first)["state"], "reached") << first->dump();
+  EXPECT_EQ((*first)["goal_id"], 1);
+  EXPECT_LE(distance(*first, 10.5, 4.5), kGoalTolerance + 0.02) << first->dump();
+
+  // At once the second goal, 3.5 m back along the corridor.
+  {
+    const auto [code, out] = staactl({"goal", "7.0", "4.5", "3.14159", "--wait", "--timeout", "60"}, kTrip);
+    ASSERT_TRUE(code.has_value()) << "goal --wait did not return";
+    EXPECT_EQ(*code, 0) << out << readFile(dir_ / "staactl.err");
+    EXPECT_EQ(out, "ok (goal 2)\nreached\n");
+  }
+  const auto second = status();
+  ASSERT_TRUE(second.has_value());
+  EXPECT_EQ((*second)["state"], "reached") << second->dump();
+  EXPECT_EQ((*second)["goal_id"], 2);
+  EXPECT_LE(distance(*second, 7.0, 4.5), kGoalTolerance + 0.02) << "returned before the robot was at goal 2: "
+                                                                 << second->dump();
+
+  // The plain `goal` then `wait`, as scripts did before goal ids.
+  {
+    const auto [code, out] = staactl({"goal", "9.0", "4.5", "0"});
+    ASSERT_TRUE(code.has_value());
+    EXPECT_EQ(*code, 0);
+    EXPECT_EQ(out, "ok (goal 3)\n");
+  }
+  {
+    const auto [code, out] = staactl({"wait", "--timeout", "60"}, kTrip);
+    ASSERT_TRUE(code.has_value()) << "wait did not return";
+    EXPECT_EQ(*code, 0) << out << readFile(dir_ / "staactl.err");
+    EXPECT_EQ(out, "reached\n");
+  }
+  const auto third = status();
+  ASSERT_TRUE(third.has_value());
+  EXPECT_EQ((*third)["goal_id"], 3);
+  EXPECT_LE(distance(*third, 9.0, 4.5), kGoalTolerance + 0.02) << "wait returned before the robot was at goal 3: "
+                                                                << third->dump();
+  EXPECT_EQ((*third)["rt_allocations"], 0);
+}
+
+// `staad --svg FILE`, with no telemetry file: on SIGTERM the picture of the run is written.
+TEST_F(StaadE2E, SvgOfTheRunIsWrittenOnSigtermEvenWithoutATelemetryFile) {
+  const fs::path svg = dir_ / "run.svg";
+  daemon_ = startDaemon(writeConfig(config("{control_hz: 30, base_hz: 100, perception_hz: 30}", "{path: \"\"}")), {},
+                        "staad", {"--svg", svg.string()});
+  ASSERT_TRUE(answering());
+  EXPECT_FALSE(fs::exists(svg)) << "written when staad stops, not before";
+  {
+    const auto [code, out] = staactl({"goal", "8.5", "4.5", "0", "--wait", "--timeout", "60"}, milliseconds(90'000));
+    ASSERT_TRUE(code.has_value());
+    EXPECT_EQ(*code, 0) << out << readFile(dir_ / "staactl.err");
+  }
+  daemon_.signal(SIGTERM);
+  const auto code = daemon_.wait(milliseconds(5'000));
+  ASSERT_TRUE(code.has_value()) << "staad did not exit after SIGTERM";
+  EXPECT_EQ(*code, 0);
+  EXPECT_FALSE(fs::exists(telemetry_)) << "no telemetry file was asked for";
+
+  ASSERT_TRUE(fs::exists(svg)) << readFile(dir_ / "staad.err");
+  EXPECT_FALSE(fs::exists(dir_ / "run.svg.tmp")) << "the temporary file is renamed, not left";
+  const std::string doc = readFile(svg);
+  const auto open = doc.find("<svg");
+  ASSERT_NE(open, std::string::npos) << doc.substr(0, 300);
+  const auto close = doc.rfind("</svg>");
+  ASSERT_NE(close, std::string::npos);
+  EXPECT_LT(open, close);
+  EXPECT_EQ(doc.find_first_not_of(" \n", close + 6), std::string::npos) << "nothing after </svg>";
+
+  // The path driven: a polyline in the path's colour with one point per 5 cm or so of the
+  // 4 m trip (at most one per 5 cm, plus the end pose).
+  const auto path = doc.find("<polyline fill=\"none\" stroke=\"#e8590c\"");
+  ASSERT_NE(path, std::string::npos) << "no path polyline";
+  const auto points_at = doc.find("points=\"", path);
+  ASSERT_NE(points_at, std::string::npos);
+  const auto points_end = doc.find('"', points_at + 8);
+  const std::string points = doc.substr(points_at + 8, points_end - points_at - 8);
+  const auto n = std::count(points.begin(), points.end(), ',');
+  EXPECT_GE(n, 40) << points;
+  EXPECT_LE(n, 200) << points;
+  // The goal's marker with its id, and the title's numbers.
+  EXPECT_NE(doc.find(">1</text>"), std::string::npos) << "no label for goal 1";
+  EXPECT_NE(doc.find("1 of 1 goal reached"), std::string::npos) << doc.substr(0, 2000);
+  EXPECT_NE(doc.find(" m driven"), std::string::npos);
+  EXPECT_NE(readFile(dir_ / "staad.err").find("svg: wrote the run's picture to " + svg.string()), std::string::npos)
+      << readFile(dir_ / "staad.err");
+}
+
+TEST_F(StaadE2E, SvgPathThatCannotBeWrittenStopsStartUpWithExit1) {
+  const fs::path svg = dir_ / "no-such-dir" / "run.svg";
+  daemon_ = startDaemon(writeConfig(config()), {}, "staad", {"--svg", svg.string()});
+  const auto code = daemon_.wait(milliseconds(10'000));
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 1);
+  const std::string err = readFile(dir_ / "staad.err");
+  EXPECT_NE(err.find("staad: svg file '" + svg.string() + "'"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(socket_));
 }
 
 TEST_F(StaadE2E, BadConfigValueExits2NamingTheKeyAndTheValue) {
