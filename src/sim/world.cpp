@@ -58,6 +58,12 @@ World::World(PolygonMap map, RobotProfile profile, const Pose2& start, std::vect
     m.box = boundingBox(m.spec.polygon);
     movers_.push_back(std::move(m));
   }
+  // The scratch polygons reach their largest size here, once: a step never allocates (the
+  // daemon's simulated base steps the world in a real-time thread).
+  body_.reserve(profile_.footprint.size());
+  std::size_t largest_mover = 0;
+  for (const MoverTrack& m : movers_) largest_mover = std::max(largest_mover, m.spec.polygon.size());
+  other_.reserve(largest_mover);
   robot_.pose = start;
   updateMovers();
   min_clearance_ = clearance();

@@ -551,5 +551,27 @@ TEST(SimHal, ReadWriteAndObstacleReadsAllocateNothingAfterWarmUp) {
   EXPECT_GT(hal.base().odometry().stamp, 0);
 }
 
+// The simulated base steps the World in a real-time thread: the world's scratch polygons are
+// sized at construction, so not even the first step that brings a mover near allocates (the
+// daemon once counted 1 real-time allocation there, the first time a person came close).
+TEST(SimHal, WorldStepsAllocateNothingFromTheFirstOneEvenWhenAMoverComesNear) {
+  const Polygon square{{-0.25, -0.25}, {0.25, -0.25}, {0.25, 0.25}, {-0.25, 0.25}};
+  const Mover mover{square, {{12.0, 0.0}, {1.0, 0.0}}, 1.0};  // starts far, walks up to the robot
+  PolygonMap map;
+  map.name = "open";
+  map.obstacles.push_back(Polygon{{-3.0, 2.0}, {15.0, 2.0}, {15.0, 2.2}, {-3.0, 2.2}});
+  World world(map, paperAgentProfile(), Pose2{}, {mover});
+  std::size_t allocations = 0;
+  double nearest = 1e9;
+  for (int k = 0; k < 400; ++k) {  // 13 s: the mover arrives after ~10.5 s
+    test::AllocationScope scope;
+    world.step(1.0 / 30.0, 0.0, 0.0);
+    allocations += scope.count();
+    nearest = std::min(nearest, (world.moverPosition(0) - world.robot().pose.position()).norm());
+  }
+  EXPECT_LT(nearest, 1.5);  // it did come near
+  EXPECT_EQ(allocations, 0u);
+}
+
 }  // namespace
 }  // namespace staa::hal
