@@ -25,9 +25,19 @@ Action brakeAction(const UnicycleState& s, const MotionLimits& limits, double dt
   return Action{towardsZero(s.v, limits.a_max), towardsZero(s.w, limits.b_max)};
 }
 
+namespace {
+StaaConfig adaptedConfig(StaaConfig c, const MotionLimits& limits) {
+  if (c.adapt_dt) {
+    if (limits.a_max > 0.0) c.dt = std::max(c.dt, std::sqrt(2.0 * c.closed_xy_m / limits.a_max));
+    if (limits.b_max > 0.0) c.dt = std::max(c.dt, std::sqrt(2.0 * c.closed_theta_rad / limits.b_max));
+  }
+  return c;
+}
+}  // namespace
+
 StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const std::vector<Polygon>& inflated_static,
                    const LocalMapConfig& local)
-    : config_(config),
+    : config_(adaptedConfig(config, robot.limits)),
       limits_(robot.limits),
       actions_(robot.limits, config.notches),
       collision_(robot, local),

@@ -150,7 +150,7 @@ void writeFrame(const std::filesystem::path& file, const World& world, ControlCy
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     canvas.polygon(obstacles.observed(k).view(), svgFill("#8e44ad", 0.8));
     for (int d = 1; d <= 3; ++d) {
-      obstacles.predict(k, d * cycle.config().staa.dt, pred);
+      obstacles.predict(k, d * cycle.planner().config().dt, pred);
       canvas.polygon(pred.view(), svgStroke("#8e44ad", 1.0, "3 2"));
     }
   }

@@ -1,10 +1,14 @@
 #include "control/control_cycle.hpp"
+#include "control/robot_profile.hpp"
 #include "map/generate.hpp"
 #include "sim/sim_runner.hpp"
 
 #include "scenarios.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
 
 namespace staa {
 namespace {
@@ -96,6 +100,28 @@ TEST(ControlCycle, CrossesTheOfficeWithoutCollision) {
   EXPECT_TRUE(r.reached_goal) << r.final_state << " at " << r.final_pose.x << ", " << r.final_pose.y;
   EXPECT_EQ(r.collisions, 0);
   EXPECT_LT(r.time_to_goal_s, 30.0);  // a 36 m shortest path
+}
+
+// The HSR (0.22 m/s, 0.5 m/s^2, 1.5 rad/s^2) from standstill towards a room that needs a turn:
+// with the paper's 0.3 s step its first actions all fell into the start's closed cell and it
+// never moved; the step adapted to its limits (0.45 s) lets it start at once.
+TEST(ControlCycle, TheSlowHsrStartsFromStandstillAndTurnsIntoARoom) {
+  Scenario s;
+  s.name = "office";
+  s.map = generateOfficeMap();
+  s.robot = loadRobotProfile(std::string(STAA_SOURCE_DIR) + "/config/robots/hsr.yaml");
+  s.start = {1.5, 4.5, 0.0};
+  s.goal = {4.5, 1.5, 0.0};
+  SimOptions o;
+  o.duration_s = 3.0;
+  o.budget_expansions = 300;
+  const SimResult r = runSingleRobot(s, o);
+  const double moved = (r.final_pose.position() - s.start.position()).norm();
+  EXPECT_GT(moved, 0.3);  // 3 s at up to 0.22 m/s after a 0.44 s ramp: about 0.6 m
+  EXPECT_EQ(r.collisions, 0);
+  ControlConfig config;
+  ControlCycle cycle(s.map, s.robot, config);
+  EXPECT_NEAR(cycle.planner().config().dt, std::sqrt(2.0 * 0.05 / 0.5), 1e-12);
 }
 
 }  // namespace
