@@ -20,6 +20,12 @@ timespec toTimespec(Nanos t) {
 
 }  // namespace
 
+Nanos threadCpuTime() {
+  timespec ts{};
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0) return -1;
+  return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
+}
+
 Nanos MonotonicClock::now() const {
   timespec ts{};
   // CLOCK_MONOTONIC cannot fail with a valid pointer; the result is not checked.

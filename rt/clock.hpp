@@ -22,6 +22,9 @@ class Clock {
   virtual int sleepUntil(Nanos deadline) = 0;
 };
 
+// CPU time consumed by the calling thread so far (CLOCK_THREAD_CPUTIME_ID), -1 if unavailable.
+Nanos threadCpuTime();
+
 // CLOCK_MONOTONIC; sleepUntil = clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME).
 class MonotonicClock final : public Clock {
  public:

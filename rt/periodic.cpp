@@ -35,7 +35,9 @@ Wake PeriodicLoop::wait() {
   return w;
 }
 
-std::uint64_t PeriodicLoop::finish() {
+std::uint64_t PeriodicLoop::finish() { return finish(-1); }
+
+std::uint64_t PeriodicLoop::finish(Nanos cpu_time) {
   const Nanos now = clock_.now();
   last_exec_ = now - last_wake_.woke;
   exec_.record(last_exec_);
@@ -50,10 +52,12 @@ std::uint64_t PeriodicLoop::finish() {
     // The cycle ended past the next deadline: skip to the first deadline strictly in the
     // future instead of running a burst of late cycles to catch up.
     ++counters_.overruns;
-    if (last_exec_ > period_) {
-      ++counters_.execution_overruns;
-    } else {
+    if (last_exec_ <= period_) {
       ++counters_.late_wakeups;
+    } else if (cpu_time >= 0 && cpu_time <= period_) {
+      ++counters_.preempted;
+    } else {
+      ++counters_.execution_overruns;
     }
     const auto first_future = static_cast<std::uint64_t>((now - start_) / period_) + 1;
     skipped = first_future - next;

@@ -5,7 +5,11 @@
 // periods are skipped (no burst of catch-up cycles). Every missed deadline is attributed:
 //   - execution overrun (ours): the body itself took longer than the period;
 //   - late wake-up (the platform's): the body fit in a period, but woke so late that it ended
-//     past the next deadline.
+//     past the next deadline;
+//   - preempted (the platform's): given the body's own CPU time (finish(cpu_time)), the body
+//     needed less than a period of CPU but was kept off the CPU (preemption, a virtual
+//     machine's stolen time) until it ended past the next deadline. Without the CPU time,
+//     a body longer than a period counts as an execution overrun.
 // No allocation; not thread-safe (one thread owns a loop).
 
 #include "rt/clock.hpp"
@@ -20,6 +24,7 @@ struct PeriodicCounters {
   std::uint64_t overruns = 0;             // cycles that ended after the next deadline
   std::uint64_t execution_overruns = 0;   // ... of them, because the body took > period
   std::uint64_t late_wakeups = 0;         // ... of them, because the wake-up was late
+  std::uint64_t preempted = 0;            // ... of them, because the body was kept off the CPU
   std::uint64_t skipped_periods = 0;      // deadlines dropped in all
   std::uint64_t sleep_errors = 0;         // sleepUntil returned non-zero
 };
@@ -46,6 +51,10 @@ class PeriodicLoop {
   // attributes and counts an overrun, and moves the deadline to the next one in the future
   // (skipping missed ones). Returns the number of periods skipped (0 normally).
   std::uint64_t finish();
+  // The same, with the body's own CPU time (e.g. CLOCK_THREAD_CPUTIME_ID around it): an
+  // overrun whose body used less than a period of CPU is the platform's (preempted or a late
+  // wake-up), never an execution overrun.
+  std::uint64_t finish(Nanos cpu_time);
 
   Nanos period() const { return period_; }
   Nanos nextDeadline() const { return deadline_; }

@@ -95,11 +95,11 @@ for kind in ("fifo", "other"):
     rows.append((kind, s, c, w))
 with open(f"{out}/summary.md", "w") as f:
     f.write(f"duration {duration} s, load: {'stress-ng --cpu 2' if stress else 'none'}\n\n")
-    f.write("| | cycles | exec p50 / p99 / max (us) | wake p50 / p99 / max (us) | overruns | execution overruns | late wake-ups | rt_allocations | realtime |\n|---|---|---|---|---|---|---|---|---|\n")
+    f.write("| | cycles | exec p50 / p99 / max (us) | wake p50 / p99 / max (us) | overruns | execution overruns (ours) | late wake-ups | preempted | rt_allocations | realtime |\n|---|---|---|---|---|---|---|---|---|---|\n")
     for kind, s, c, w in rows:
-        f.write(f"| staad {kind} | {c['count']} | {c['p50_us']:.0f} / {c['p99_us']:.0f} / {c['max_us']:.0f} | {w.get('p50_us',0):.0f} / {w.get('p99_us',0):.0f} / {w.get('max_us',0):.0f} | {c['overruns']} | {s.get('execution_overruns')} | {s.get('late_wakeups')} | {s['rt_allocations']} | {s.get('realtime')} |\n")
+        f.write(f"| staad {kind} | {c['count']} | {c['p50_us']:.0f} / {c['p99_us']:.0f} / {c['max_us']:.0f} | {w.get('p50_us',0):.0f} / {w.get('p99_us',0):.0f} / {w.get('max_us',0):.0f} | {c['overruns']} | {s.get('execution_overruns')} | {s.get('late_wakeups')} | {s.get('preempted')} | {s['rt_allocations']} | {s.get('realtime')} |\n")
     for kind in ("fifo", "other"):
         ct = cyclic(f"{out}/cyclictest-{kind}.txt")
-        f.write(f"| cyclictest {kind} | {ct['count']} | | {ct['p50']} / {ct['p99']} / {ct['max']} | wake-ups later than a period: {ct['over_period']} | | | | |\n")
+        f.write(f"| cyclictest {kind} | {ct['count']} | | {ct['p50']} / {ct['p99']} / {ct['max']} | wake-ups later than a period: {ct['over_period']} | | | | | |\n")
 print(open(f"{out}/summary.md").read())
 PY

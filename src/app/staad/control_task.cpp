@@ -290,6 +290,7 @@ void ControlTask::publishStatus(rt::Nanos now) {
     s.overruns = c.overruns;
     s.execution_overruns = c.execution_overruns;
     s.late_wakeups = c.late_wakeups;
+    s.preempted = c.preempted;
     s.skipped_periods = c.skipped_periods;
   }
   // Percentiles are read by the service thread from the loop's histograms (costly here).

@@ -248,6 +248,7 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
   j["wake"] = {{"p50_us", status.wake_p50_us}, {"p99_us", status.wake_p99_us}, {"max_us", status.wake_max_us}};
   j["execution_overruns"] = status.execution_overruns;
   j["late_wakeups"] = status.late_wakeups;
+  j["preempted"] = status.preempted;
   j["skipped_periods"] = status.skipped_periods;
   // Never seen is null, not -1: a script comparing ages against a limit must not read -1 as fresh.
   auto age = [](double s) { return s < 0.0 ? Json(nullptr) : Json(s); };

@@ -41,6 +41,7 @@ struct Status {
   double cycle_p50_us = 0.0, cycle_p99_us = 0.0, cycle_max_us = 0.0;
   double wake_p50_us = 0.0, wake_p99_us = 0.0, wake_max_us = 0.0;
   std::uint64_t overruns = 0, execution_overruns = 0, late_wakeups = 0, skipped_periods = 0;
+  std::uint64_t preempted = 0;  // overruns whose cycle used less than a period of CPU
   // Input staleness: seconds since the newest odometry / obstacle frame (-1: never seen).
   double odometry_age_s = -1.0;
   double obstacles_age_s = -1.0;

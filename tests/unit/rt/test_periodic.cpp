@@ -239,4 +239,29 @@ TEST(PeriodicLoop, RunsOnTheMonotonicClock) {
 }
 
 }  // namespace
+// With the body's CPU time: a body that took 2.5 periods of wall time but only a fifth of a
+// period of CPU was kept off the CPU (the platform's), not an execution overrun; one that
+// used 1.2 periods of CPU is ours.
+TEST(PeriodicLoop, CpuTimeTellsPreemptionFromAnExecutionOverrun) {
+  constexpr Nanos kPeriod = 10 * kNanosPerMilli;
+  ManualClock clock(0);
+  PeriodicLoop loop(clock, kPeriod, kPeriod);
+  loop.wait();
+  clock.advance(kPeriod * 5 / 2);
+  EXPECT_EQ(loop.finish(kPeriod / 5), 2u);
+  EXPECT_EQ(loop.counters().preempted, 1u);
+  EXPECT_EQ(loop.counters().execution_overruns, 0u);
+  loop.wait();
+  clock.advance(kPeriod * 5 / 2);
+  loop.finish(kPeriod * 6 / 5);
+  EXPECT_EQ(loop.counters().execution_overruns, 1u);
+  EXPECT_EQ(loop.counters().preempted, 1u);
+  EXPECT_EQ(loop.counters().overruns, 2u);
+  loop.wait();
+  clock.advance(kPeriod / 2);
+  EXPECT_EQ(loop.finish(kPeriod / 2), 0u);  // on time: nothing counted
+  EXPECT_EQ(loop.counters().overruns, 2u);
+  EXPECT_GE(threadCpuTime(), 0);
+}
+
 }  // namespace staa::rt
