@@ -1,6 +1,7 @@
 #include "hal/sim/sim_hal.hpp"
 
 #include "geometry/polygon.hpp"
+#include "geometry/splitmix64.hpp"
 #include "path/global_path.hpp"
 #include "sim/world.hpp"
 
@@ -32,27 +33,6 @@ constexpr double kMaxCatchUpS = 1.0;
 // > 10,000 steps; coarser than 1 s is no simulation of a controller running at 30 Hz.
 constexpr double kMinStepS = 1e-4;
 constexpr double kMaxStepS = 1.0;
-
-// SplitMix64 (Steele, Lea, Flood 2014): a few lines whose output is the same on every
-// platform, unlike std's distributions, so a seed gives the same movers everywhere.
-class SplitMix64 {
- public:
-  explicit SplitMix64(std::uint64_t seed) : state_(seed) {}
-  std::uint64_t next() {
-    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [a, b) from the top 53 bits.
-  double uniform(double a, double b) { return a + (b - a) * (static_cast<double>(next() >> 11) * 0x1.0p-53); }
-  // Uniform index in [0, n); the modulo bias is below 2^-50 for any map's goal count.
-  std::size_t index(std::size_t n) { return static_cast<std::size_t>(next() % n); }
-
- private:
-  std::uint64_t state_;
-};
-
 // Shortest text that reads back to the same double.
 std::string number(double v) {
   std::array<char, 64> buf{};
@@ -144,7 +124,7 @@ std::vector<Mover> planMovers(const PolygonMap& map, const RobotProfile& robot, 
 
   SplitMix64 rng(config.seed);
   const auto pick = [&]() -> Vec2 {
-    if (!map.goals.empty()) return map.goals[rng.index(map.goals.size())];
+    if (!map.goals.empty()) return map.goals[rng.below(map.goals.size())];
     return {rng.uniform(area.min.x(), area.max.x()), rng.uniform(area.min.y(), area.max.y())};
   };
   const int tries = kTriesPerMover * config.movers;

@@ -2,6 +2,7 @@
 
 #include "geometry/clipper_ops.hpp"
 #include "geometry/polygon.hpp"
+#include "geometry/splitmix64.hpp"
 #include "map/yaml_support.hpp"
 
 #include <clipper.hpp>
@@ -27,23 +28,6 @@ constexpr double kArcTolerance_m = 0.01;
 constexpr double kMaxLatticePoints = 4e6;
 
 using yaml_support::formatNumber;
-
-// SplitMix64: its output is fixed by its definition (std's distributions are not), so a seed
-// picks the same first goal on every platform.
-class SplitMix64 {
- public:
-  explicit SplitMix64(std::uint64_t seed) : state_(seed) {}
-  std::uint64_t next() {
-    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-
- private:
-  std::uint64_t state_;
-};
-
 // Both built by appending: GCC 12 warns falsely (-Wrestrict) on "'" + s + "'" and the like.
 std::string mapLabel(const PolygonMap& map) {
   if (map.name.empty()) return "map (unnamed)";

@@ -2,6 +2,7 @@
 
 #include "control/dwa_controller.hpp"
 #include "control/pd_controller.hpp"
+#include "geometry/splitmix64.hpp"
 #include "sim/multi_world.hpp"
 
 #include <algorithm>
@@ -53,27 +54,6 @@ bool parseControllerKind(const std::string& text, ControllerKind& out) {
 }
 
 namespace {
-
-// SplitMix64: a tiny generator whose output is fixed by its definition (std's distributions
-// are not), so a seed gives the same starts and goals on every platform.
-class SplitMix64 {
- public:
-  explicit SplitMix64(std::uint64_t seed) : state_(seed) {}
-  std::uint64_t next() {
-    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [0, n) (the modulo bias is below 2^-50 for any map's goal count).
-  std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
-  // Uniform in [0, 1).
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-
- private:
-  std::uint64_t state_;
-};
-
 // Independent streams: one for the start poses, one per agent for its goals, so an agent's
 // goal sequence does not depend on what the others do (the controllers are compared on the
 // same goals for the same seed).
