@@ -22,4 +22,18 @@ struct LogRecord {
 
 using LogRing = SpscRing<LogRecord, 256>;
 
+// Pushes one record (no formatting, no allocation); a full ring drops and counts it.
+inline void pushLog(LogRing& ring, Nanos now, LogLevel level, const char* message, double a = 0.0, double b = 0.0,
+                    double c = 0.0, std::uint8_t count = 0) {
+  LogRecord r;
+  r.time = now;
+  r.level = level;
+  r.message = message;
+  r.values[0] = a;
+  r.values[1] = b;
+  r.values[2] = c;
+  r.value_count = count;
+  ring.push(r);
+}
+
 }  // namespace staa::rt

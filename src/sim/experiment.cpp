@@ -288,14 +288,8 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
     j["goals_reached"] = m.goals_reached;
     j["collisions"] = m.collisions;
     j["score"] = m.score;
-    Json planner;
-    planner["calls"] = m.calls;
-    planner["expansions"] = distributionJson(m.expansions, true, false);
-    planner["successors"] = distributionJson(m.successors, true, false);
-    planner["finished_early_ratio"] = m.finished_early_ratio;
-    planner["depth_mean"] = m.depth_mean;
-    planner["plan_us"] = distributionJson(m.plan_us, false, true);
-    j["planner"] = std::move(planner);
+    j["planner"] = plannerJson(m.calls, m.expansions, m.successors, m.finished_early_ratio, m.depth_mean,
+                               m.plan_us);
     j["heuristic"] = heuristicLabel(r);
     Json agents = Json::array();
     for (const AgentResult& a : m.agents) {

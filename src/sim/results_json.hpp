@@ -18,4 +18,17 @@ inline nlohmann::ordered_json distributionJson(const Distribution& d, bool with_
   return j;
 }
 
+// The "planner" object of ARCHITECTURE.md section 6 (one run, one robot or several agents).
+inline nlohmann::ordered_json plannerJson(int calls, const Distribution& expansions, const Distribution& successors,
+                                          double finished_early_ratio, double depth_mean, const Distribution& plan_us) {
+  nlohmann::ordered_json planner;
+  planner["calls"] = calls;
+  planner["expansions"] = distributionJson(expansions, true, false);
+  planner["successors"] = distributionJson(successors, true, false);
+  planner["finished_early_ratio"] = finished_early_ratio;
+  planner["depth_mean"] = depth_mean;
+  planner["plan_us"] = distributionJson(plan_us, false, true);
+  return planner;
+}
+
 }  // namespace staa

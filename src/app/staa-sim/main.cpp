@@ -204,14 +204,8 @@ Json resultJson(const Request& rq, const staa::SimResult& r) {
   // Infinite only in an unbounded, empty world: JSON has no infinity, so null.
   j["min_clearance_m"] = std::isfinite(r.min_clearance_m) ? Json(r.min_clearance_m) : Json(nullptr);
 
-  Json planner;
-  planner["calls"] = r.calls;
-  planner["expansions"] = distributionJson(r.expansions, true, false);
-  planner["successors"] = distributionJson(r.successors, true, false);
-  planner["finished_early_ratio"] = r.finished_early_ratio;
-  planner["depth_mean"] = r.depth.mean;
-  planner["plan_us"] = distributionJson(r.plan_us, false, true);
-  j["planner"] = std::move(planner);
+  j["planner"] = plannerJson(r.calls, r.expansions, r.successors, r.finished_early_ratio, r.depth.mean,
+                             r.plan_us);
   j["cycle_us"] = distributionJson(r.cycle_us, false, true);
   j["path_us"] = distributionJson(r.path_us, false, true);
   j["brakes"] = r.brakes;
@@ -490,14 +484,8 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
   // Infinite only for a lone agent in an unbounded, empty world: JSON has no infinity.
   j["min_clearance_m"] = std::isfinite(min_clearance) ? Json(min_clearance) : Json(nullptr);
 
-  Json planner;
-  planner["calls"] = r.calls;
-  planner["expansions"] = distributionJson(r.expansions, true, false);
-  planner["successors"] = distributionJson(r.successors, true, false);
-  planner["finished_early_ratio"] = r.finished_early_ratio;
-  planner["depth_mean"] = r.depth_mean;
-  planner["plan_us"] = distributionJson(r.plan_us, false, true);
-  j["planner"] = std::move(planner);
+  j["planner"] = plannerJson(r.calls, r.expansions, r.successors, r.finished_early_ratio, r.depth_mean,
+                             r.plan_us);
   j["simulated_s"] = r.duration_s;
   j["frames_written"] = frames;
   Json agents = Json::array();

@@ -79,15 +79,7 @@ ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, ClockFn
 
 void ControlTask::log(rt::Nanos now, rt::LogLevel level, const char* message, double a, double b, double c,
                       std::uint8_t count) {
-  rt::LogRecord r;
-  r.time = now;
-  r.level = level;
-  r.message = message;
-  r.values[0] = a;
-  r.values[1] = b;
-  r.values[2] = c;
-  r.value_count = count;
-  ch_.control_log.push(r);  // a full ring drops (and counts) the record
+  rt::pushLog(ch_.control_log, now, level, message, a, b, c, count);  // a full ring drops (and counts) it
 }
 
 // 1. Requests from the service thread.

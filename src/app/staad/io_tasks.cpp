@@ -20,15 +20,7 @@ BaseTask::BaseTask(hal::Base& base, Channels& channels, rt::Nanos control_period
 
 void BaseTask::log(rt::Nanos now, rt::LogLevel level, const char* message, double a, double b, double c,
                    std::uint8_t count) {
-  rt::LogRecord r;
-  r.time = now;
-  r.level = level;
-  r.message = message;
-  r.values[0] = a;
-  r.values[1] = b;
-  r.values[2] = c;
-  r.value_count = count;
-  ch_.base_log.push(r);
+  rt::pushLog(ch_.base_log, now, level, message, a, b, c, count);  // a full ring drops (and counts) it
 }
 
 void BaseTask::cycle(rt::Nanos now) {
