@@ -24,6 +24,7 @@ GlobalPathOptions ControlCycle::pathOptions(const ControlConfig& config, double 
 }
 
 namespace {
+constexpr std::size_t kHeldPathCapacity = 4096;
 double inflationFor(const ControlConfig& config, const RobotProfile& robot) {
   return config.inflation_m > 0.0 ? config.inflation_m : robot.circumradius();
 }
@@ -53,16 +54,22 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
       local_(config.local),
       staa_(staaFor(config.staa, inflation_, dynamic_inflation_, local_inflation_ + config.path.arc_tolerance_m), robot,
             local_obstacles_, config.local),
-      empty_obstacles_(1) {}
+      empty_obstacles_(1) {
+  held_path_.reserve(kHeldPathCapacity);
+}
 
 void ControlCycle::setGoal(const Pose2& goal) {
   goal_ = goal;
   state_ = CycleState::kDriving;
+  held_valid_ = false;
+  path_misses_ = 0;
 }
 
 void ControlCycle::clearGoal() {
   goal_.reset();
   state_ = CycleState::kIdle;
+  held_valid_ = false;
+  path_misses_ = 0;
 }
 
 CycleOutput ControlCycle::stop(const UnicycleState& robot, CycleState state) {
@@ -72,6 +79,26 @@ CycleOutput ControlCycle::stop(const UnicycleState& robot, CycleState state) {
   const Action brake = brakeAction(robot, robot_.limits, period);
   out.v_cmd = robot.v + brake.a * period;
   out.w_cmd = robot.w + brake.b * period;
+  out.state = state;
+  return out;
+}
+
+CycleOutput ControlCycle::safeStop(const UnicycleState& robot, const DynamicObstacleSet& obstacles, const Pose2& goal,
+                                   CycleState state) {
+  constexpr double kMoving = 1e-3;
+  if (baseline_ != nullptr || !config_.staa.brake_safety || (std::abs(robot.v) < kMoving && std::abs(robot.w) < kMoving)) {
+    return stop(robot, state);
+  }
+  // The local map around the robot (a path straight to the goal only places G~; the stop
+  // needs the obstacles).
+  const std::array<Vec2, 2> line{robot.position(), goal.position()};
+  local_.update(robot.pose(), path_.realObstacleSet(), line, goal.theta);
+  const Action a = staa_.safeStop(robot, local_, obstacles);
+  const double period = 1.0 / config_.rate_hz;
+  const MotionLimits& lim = robot_.limits;
+  CycleOutput out;
+  out.v_cmd = std::clamp(robot.v + a.a * period, lim.v_min, lim.v_max);
+  out.w_cmd = std::clamp(robot.w + a.b * period, -lim.w_max, lim.w_max);
   out.state = state;
   return out;
 }
@@ -92,6 +119,11 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
     return stop(robot, state_);
   }
 
+  // One budget for the whole cycle: its clock starts now, so the path queries, the local
+  // map and STAA* all end by the budget (STAA*'s own start() is then a no-op).
+  budget.start();
+  const Deadline deadline = budget.deadline();
+
   CycleOutput out;
   // 1. Global path, around the inflated moving obstacles where possible.
   std::int64_t t0 = steadyClockNs();
@@ -100,24 +132,45 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
     obstacles.predictInflated(i, 0.0, dynamic_inflation_, config_.staa.heuristic.arc_steps, inflated_[i]);
     views_[i] = inflated_[i].view();
   }
-  const GlobalPath path = n > 0 ? path_.plan(robot.position(), goal.position(), std::span<const PolygonView>(views_.data(), n))
-                                : path_.plan(robot.position(), goal.position());
+  const GlobalPath path = n > 0 ? path_.plan(robot.position(), goal.position(), std::span<const PolygonView>(views_.data(), n), deadline)
+                                : path_.plan(robot.position(), goal.position(), deadline);
   out.path_ns = steadyClockNs() - t0;
   out.path_status = path.status;
   out.path_dynamic = path.dynamic;
   out.path_length = path.length;
-  if (path.status != PathStatus::kFound) {
-    state_ = CycleState::kUnreachable;
-    CycleOutput stopped = stop(robot, state_);
-    stopped.path_status = path.status;
-    stopped.path_ns = out.path_ns;
-    return stopped;
+  std::span<const Vec2> route = path.path;
+  if (path.status == PathStatus::kFound) {
+    path_misses_ = 0;
+    held_valid_ = path.path.size() <= held_path_.capacity();
+    if (held_valid_) held_path_.assign(path.path.begin(), path.path.end());  // within capacity: no allocation
+  } else {
+    ++path_misses_;
+    const double period = 1.0 / config_.rate_hz;
+    const bool hold = path.status != PathStatus::kGoalInObstacle && held_valid_ &&
+                      static_cast<double>(path_misses_) * period <= config_.path_hold_s;
+    if (hold) {
+      route = held_path_;
+      out.path_held = true;
+    } else if (path.status == PathStatus::kAborted) {
+      // Out of time on a cold query with nothing to hold: stop for now, the search resumes
+      // where it stopped next cycle.
+      CycleOutput stopped = safeStop(robot, obstacles, goal, CycleState::kDriving);
+      stopped.path_status = path.status;
+      stopped.path_ns = out.path_ns;
+      return stopped;
+    } else {
+      state_ = CycleState::kUnreachable;
+      CycleOutput stopped = safeStop(robot, obstacles, goal, state_);
+      stopped.path_status = path.status;
+      stopped.path_ns = out.path_ns;
+      return stopped;
+    }
   }
-  last_path_ = path.path;
+  last_path_ = route;
 
   // 2. Local map and the intermediate goal.
   t0 = steadyClockNs();
-  local_.update(robot.pose(), path_.realObstacleSet(), path.path, goal.theta);
+  local_.update(robot.pose(), path_.realObstacleSet(), route, goal.theta);
   out.local_ns = steadyClockNs() - t0;
 
   // 3'. A baseline instead of STAA* (PD, DWA): it gives the command directly.
@@ -126,7 +179,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
     LocalContext ctx;
     ctx.robot = robot;
     ctx.map = &local_;
-    ctx.path = path.path;
+    ctx.path = route;
     ctx.obstacles = &obstacles;
     ctx.goal = goal;
     ctx.period_s = 1.0 / config_.rate_hz;

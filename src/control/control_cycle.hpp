@@ -54,6 +54,10 @@ struct ControlConfig {
   LocalMapConfig local;
   GlobalPathOptions path;
   std::size_t max_dynamic_obstacles = 32;
+  // When the path query fails while the robot drives (it squeezed into a gap narrower than
+  // M' allows, or the cycle's time ran out on a cold query), the last path found is followed
+  // for up to this long before the goal counts as unreachable.
+  double path_hold_s = 1.0;
 };
 
 struct CycleInputs {
@@ -67,6 +71,7 @@ struct CycleOutput {
   CycleState state = CycleState::kIdle;
   PathStatus path_status = PathStatus::kNoPath;
   bool path_dynamic = false;
+  bool path_held = false;  // the query failed (path_status says why): the last path was followed
   double path_length = 0.0;
   PlanResult plan;
   bool planned = false;  // false when no STAA* ran (idle, reached, unreachable)
@@ -100,6 +105,9 @@ class ControlCycle {
 
  private:
   CycleOutput stop(const UnicycleState& robot, CycleState state);
+  // Stopping from speed without a path: STAA*'s safe stop on this cycle's local map.
+  CycleOutput safeStop(const UnicycleState& robot, const DynamicObstacleSet& obstacles, const Pose2& goal,
+                       CycleState state);
   static GlobalPathOptions pathOptions(const ControlConfig& config, double inflation);
 
   ControlConfig config_;
@@ -117,6 +125,11 @@ class ControlCycle {
   std::array<FixedPolygon, 64> inflated_{};
   std::array<PolygonView, 64> views_{};
   std::span<const Vec2> last_path_;
+  // The last path found, held for path_hold_s (capacity reserved at construction; a longer
+  // path is not held), and how many cycles in a row the query has failed.
+  std::vector<Vec2> held_path_;
+  bool held_valid_ = false;
+  int path_misses_ = 0;
   LocalController* baseline_ = nullptr;
 };
 

@@ -12,6 +12,7 @@ const char* toString(PathStatus status) {
     case PathStatus::kNoPath: return "no path";
     case PathStatus::kGoalInObstacle: return "goal inside an obstacle";
     case PathStatus::kStartBlocked: return "no free space near the start";
+    case PathStatus::kAborted: return "out of time";
   }
   return "unknown";
 }
@@ -48,12 +49,13 @@ bool GlobalPathPlanner::insideRealObstacle(const Vec2& p) const {
   return real_set_.pointBlocked(p);
 }
 
-GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal) {
-  return run(static_search_, start, goal, false);
+GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal, const Deadline& deadline) {
+  return run(static_search_, start, goal, false, deadline);
 }
 
-GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated) {
-  const GlobalPath fixed = run(static_search_, start, goal, false);
+GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated,
+                                   const Deadline& deadline) {
+  const GlobalPath fixed = run(static_search_, start, goal, false, deadline);
   if (fixed.status != PathStatus::kFound || dynamic_inflated.empty()) return fixed;
   dynamic_search_.setDynamicObstacles(dynamic_inflated);
   if (pathFreeOfDynamic(fixed.path)) {
@@ -61,10 +63,11 @@ GlobalPath GlobalPathPlanner::plan(const Vec2& start, const Vec2& goal, std::spa
     same.dynamic = true;
     return same;
   }
-  GlobalPath path = run(dynamic_search_, start, goal, true);
+  GlobalPath path = run(dynamic_search_, start, goal, true, deadline);
   if (path.status == PathStatus::kFound) return path;
-  // A moving obstacle closes the way: follow the static path (paper, Sec. III-B).
-  return run(static_search_, start, goal, false);
+  // A moving obstacle closes the way (or the time ran out finding the way around it):
+  // follow the static path (paper, Sec. III-B), found above.
+  return fixed;
 }
 
 bool GlobalPathPlanner::pathFreeOfDynamic(std::span<const Vec2> path) const {
@@ -78,13 +81,14 @@ bool GlobalPathPlanner::pathFreeOfDynamic(std::span<const Vec2> path) const {
   return true;
 }
 
-GlobalPath GlobalPathPlanner::run(MinimalConstruct& search, const Vec2& start, const Vec2& goal, bool with_dynamic) {
+GlobalPath GlobalPathPlanner::run(MinimalConstruct& search, const Vec2& start, const Vec2& goal, bool with_dynamic,
+                                  const Deadline& deadline) {
   GlobalPath out;
   if (insideRealObstacle(goal)) {
     out.status = PathStatus::kGoalInObstacle;
     return out;
   }
-  const MinimalConstruct::Result r = search.query(start, goal, with_dynamic);
+  const MinimalConstruct::Result r = search.query(start, goal, with_dynamic, deadline);
   out.expansions = r.expansions;
   out.edge_checks = r.edge_checks;
   out.start_moved = r.start_moved;
@@ -99,6 +103,7 @@ GlobalPath GlobalPathPlanner::run(MinimalConstruct& search, const Vec2& start, c
     case MinimalConstruct::Status::kNoPath: out.status = PathStatus::kNoPath; break;
     case MinimalConstruct::Status::kStartBlocked: out.status = PathStatus::kStartBlocked; break;
     case MinimalConstruct::Status::kGoalBlocked: out.status = PathStatus::kNoPath; break;
+    case MinimalConstruct::Status::kAborted: out.status = PathStatus::kAborted; break;
   }
   return out;
 }

@@ -26,6 +26,8 @@ enum class PathStatus : std::uint8_t {
   kNoPath,           // start and goal are not connected in M'
   kGoalInObstacle,   // the goal lies inside a real (uninflated) obstacle or outside the bounds
   kStartBlocked,     // no free point near the start
+  kAborted,          // the deadline passed before the static path was found (the search
+                     // resumes where it stopped on the next query to the same goal)
 };
 
 const char* toString(PathStatus status);
@@ -46,12 +48,14 @@ class GlobalPathPlanner {
   // Builds M' from the map's obstacles and bounds (load time: allocates).
   GlobalPathPlanner(const PolygonMap& map, const GlobalPathOptions& options);
 
-  // Static path in M'.
-  GlobalPath plan(const Vec2& start, const Vec2& goal);
+  // Static path in M'. Both plans give up at `deadline` (kAborted; a dynamic search cut
+  // short gives the static path instead).
+  GlobalPath plan(const Vec2& start, const Vec2& goal, const Deadline& deadline = {});
   // Dynamic path in M' ∪ D' (D': already inflated), else the static path. No allocation.
   // When the static path already avoids D' it is also the dynamic shortest path (obstacles
   // only lengthen paths), and it is returned without a second search.
-  GlobalPath plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated);
+  GlobalPath plan(const Vec2& start, const Vec2& goal, std::span<const PolygonView> dynamic_inflated,
+                  const Deadline& deadline = {});
 
   // The inflated obstacles M' as simple polygons (for the local map and for drawing).
   const std::vector<Polygon>& inflatedObstacles() const { return inflated_; }
@@ -63,7 +67,8 @@ class GlobalPathPlanner {
   bool insideRealObstacle(const Vec2& p) const;
 
  private:
-  GlobalPath run(MinimalConstruct& search, const Vec2& start, const Vec2& goal, bool with_dynamic);
+  GlobalPath run(MinimalConstruct& search, const Vec2& start, const Vec2& goal, bool with_dynamic,
+                 const Deadline& deadline);
   bool pathFreeOfDynamic(std::span<const Vec2> path) const;
 
   GlobalPathOptions options_;

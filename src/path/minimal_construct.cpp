@@ -398,7 +398,8 @@ std::int32_t MinimalConstruct::addTargetNode(const Vec2& start) {
   return kTarget;
 }
 
-MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec2& goal_in, bool with_dynamic) {
+MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec2& goal_in, bool with_dynamic,
+                                                 const Deadline& deadline) {
   Result result;
   path_.clear();
   edge_checks_ = 0;
@@ -497,7 +498,19 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
 
   const std::size_t ns_poly = static_.polygonCount();
   bool found = found_fast;
+  std::uint32_t until_check = 0;
   while (!found && !heap_.empty()) {
+    if (until_check-- == 0) {
+      if (deadline.passed()) {
+        // The tree stays valid (closed nodes keep exact distances, the open list is intact;
+        // the start is re-attached by the next query), so a later query resumes here.
+        result.status = Status::kAborted;
+        result.edge_checks = edge_checks_;
+        result.discovered = total_discovered_;
+        return result;
+      }
+      until_check = 15;
+    }
     const std::int32_t v = heapPop();
     Node& node = nodes_[static_cast<std::size_t>(v)];
     if (node.parent != kNone) {

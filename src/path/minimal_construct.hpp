@@ -24,6 +24,7 @@
 // After construction a query allocates nothing, provided the dynamic obstacles stay within
 // the capacity given in the options. Not thread-safe: one instance per thread.
 
+#include "path/deadline.hpp"
 #include "path/polygon_set.hpp"
 
 #include <cstdint>
@@ -45,6 +46,8 @@ class MinimalConstruct {
     kNoPath,        // start and goal are in different free regions
     kStartBlocked,  // no free point exists near the start (everything is covered)
     kGoalBlocked,   // no free point exists near the goal
+    kAborted,       // the deadline passed first; the search tree stays, a later query to
+                    // the same goal among the same obstacles resumes it
   };
 
   struct Result {
@@ -84,8 +87,9 @@ class MinimalConstruct {
   }
 
   // Shortest path from start to goal among the static obstacles, plus the dynamic ones when
-  // `with_dynamic`. The returned span stays valid until the next query.
-  Result query(const Vec2& start, const Vec2& goal, bool with_dynamic);
+  // `with_dynamic`. The returned span stays valid until the next query. The deadline is
+  // checked every 16 expansions (a few microseconds apart).
+  Result query(const Vec2& start, const Vec2& goal, bool with_dynamic, const Deadline& deadline = {});
 
   // Is a point free (outside every obstacle's interior) / is a segment free?
   bool pointFree(const Vec2& p, bool with_dynamic) const;

@@ -3,19 +3,11 @@
 // PlannerTerminationCondition): a number of queue pops, or a wall-clock limit read from an
 // injected clock. The expansion budget makes a run reproducible bit for bit.
 
-#include <chrono>
+#include "path/deadline.hpp"
+
 #include <cstdint>
 
 namespace staa {
-
-// A monotonic clock in nanoseconds. Injected so that tests and the simulator can run the
-// planner under their own time.
-using ClockFn = std::int64_t (*)();
-
-inline std::int64_t steadyClockNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 class PlannerBudget {
  public:
@@ -35,9 +27,21 @@ class PlannerBudget {
     return b;
   }
 
-  // Called by the planner when it starts.
+  // Starts the clock of a wall-clock budget; once only (the control cycle starts it before
+  // its path queries, so that the path, the local map and STAA* share one budget; the
+  // planner's own call is then a no-op).
   void start() {
-    if (kind_ == Kind::kWallClock) start_ns_ = clock_();
+    if (kind_ == Kind::kWallClock && !started_) {
+      start_ns_ = clock_();
+      started_ = true;
+    }
+  }
+  bool started() const { return started_; }
+  // The budget's end as a Deadline for the searches it covers (path queries, the heuristic's
+  // Minimal Construct queries). Never passes for an expansion budget (reproducible runs).
+  Deadline deadline() const {
+    if (kind_ != Kind::kWallClock) return Deadline{};
+    return Deadline{clock_, start_ns_ + limit_ns_};
   }
   // Checked on every pop (paper, Sec. III-E-6). `pops` counts pops so far.
   bool exhausted(std::uint32_t pops) const {
@@ -54,6 +58,7 @@ class PlannerBudget {
   std::uint32_t max_pops_ = 1000;
   std::int64_t limit_ns_ = 19'000'000;
   std::int64_t start_ns_ = 0;
+  bool started_ = false;
   ClockFn clock_ = &steadyClockNs;
 };
 

@@ -95,8 +95,9 @@ bool Heuristic::clearSegment(const void* self, const Vec2& a, const Vec2& b) {
 }
 
 void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map,
-                        const CollisionChecker* clearance) {
+                        const CollisionChecker* clearance, const Deadline& deadline) {
   goal_ = goal;
+  deadline_ = deadline;
   map_ = &map;
   // The collision grid's clearance (this cycle's) may vouch for free segments of the local
   // paths: their obstacles reach at most local_reach_m beyond the real ones.
@@ -146,7 +147,7 @@ double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
   // The static path first (its tree is shared by all depths). Where the predicted obstacles
   // D'(t) leave it untouched it is also the shortest path among them (obstacles only make
   // paths longer), so the depth's dynamic search runs only for paths that D'(t) cuts.
-  MinimalConstruct::Result r = static_search_.query(p, g, false);
+  MinimalConstruct::Result r = static_search_.query(p, g, false, deadline_);
   const bool dynamic = depth >= 1 && depth <= config_.dynamic_depth && has_dynamic_[static_cast<std::size_t>(depth - 1)];
   if (dynamic && r.status == MinimalConstruct::Status::kFound) {
     MinimalConstruct& search = dynamic_search_[static_cast<std::size_t>(depth - 1)];
@@ -155,8 +156,9 @@ double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
     for (std::size_t i = 0; i < r.path.size() && clear; ++i) clear = !d.pointBlocked(r.path[i]);
     for (std::size_t i = 1; i < r.path.size() && clear; ++i) clear = !d.segmentBlocked(r.path[i - 1], r.path[i]);
     if (!clear) {
-      const MinimalConstruct::Result around = search.query(p, g, true);
-      // No way around the predicted obstacles (a person in the door): keep the static path.
+      const MinimalConstruct::Result around = search.query(p, g, true, deadline_);
+      // No way around the predicted obstacles (a person in the door), or no time left to
+      // find it: keep the static path.
       if (around.status == MinimalConstruct::Status::kFound) r = around;
     }
   }

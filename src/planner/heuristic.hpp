@@ -15,6 +15,7 @@
 #include "control/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
+#include "path/deadline.hpp"
 #include "path/minimal_construct.hpp"
 #include "planner/collision.hpp"
 #include "planner/unicycle.hpp"
@@ -59,9 +60,11 @@ class Heuristic {
             const LocalMapConfig& local);
 
   // Per cycle: the intermediate goal, the moving obstacles at the cycle's start, the step dt,
-  // and (for Dijkstra RTR) the local map. No allocation.
+  // and (for Dijkstra RTR) the local map. No allocation. The path heuristics' Minimal
+  // Construct queries give up at `deadline` (the cycle's budget): a state whose query ran
+  // out of time is ranked like one whose goal is unreachable, behind every state with a path.
   void prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map,
-               const CollisionChecker* clearance = nullptr);
+               const CollisionChecker* clearance = nullptr, const Deadline& deadline = {});
 
   // h for a state at search depth `depth` (time depth * dt).
   double evaluate(const UnicycleState& s, int depth);
@@ -85,6 +88,7 @@ class Heuristic {
   HeuristicConfig config_;
   MotionLimits limits_;
   Pose2 goal_;
+  Deadline deadline_;
   bool final_goal_ = false;
   MinimalConstruct static_search_;
   std::array<MinimalConstruct, 3> dynamic_search_;

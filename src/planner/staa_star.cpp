@@ -94,30 +94,72 @@ std::int32_t StaaStar::pop() {
   return n;
 }
 
-bool StaaStar::brakeFree(const UnicycleState& from, double t0) const {
+bool StaaStar::brakeFree(const UnicycleState& from, double t0, const DynamicObstacleSet& obstacles, bool stand) const {
   const double step = config_.brake_step_s;
   UnicycleState s = from;
   double t = t0;
   for (int k = 0; k < 64 && (std::abs(s.v) > 1e-3 || std::abs(s.w) > 1e-3); ++k) {
     const ArcVelocities vel = arcVelocities(s, brakeAction(s, limits_, step), step, limits_);
     if (!collision_.motionFreeStatic(s, vel, step)) return false;
-    if (!collision_.motionFreeDynamic(s, vel, step, braking_obstacles_, t)) return false;
+    if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t)) return false;
     const Pose2 p = poseAlongArc(s, vel.v_mid, vel.w_mid, step);
     s = UnicycleState{p.x, p.y, p.theta, vel.v_end, vel.w_end};
     t += step;
   }
-  if (braking_obstacles_.size() == 0) return true;
+  if (!stand || obstacles.size() == 0) return true;
   // Standing there until the slowest obstacle has stopped too.
   double last_stop = t;
-  for (std::size_t k = 0; k < braking_obstacles_.size(); ++k) {
-    const double speed = braking_obstacles_.velocity(k).norm();
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    const double speed = obstacles.velocity(k).norm();
     if (config_.obstacle_brake_decel > 0.0) {
       last_stop = std::max(last_stop, config_.obstacle_reaction_s + speed / config_.obstacle_brake_decel);
     }
   }
   if (last_stop <= t) return true;
-  const ArcVelocities stand{0.0, 0.0, 0.0, 0.0};
-  return collision_.motionFreeDynamic(s, stand, last_stop - t, braking_obstacles_, t);
+  const ArcVelocities stand_still{0.0, 0.0, 0.0, 0.0};
+  return collision_.motionFreeDynamic(s, stand_still, last_stop - t, obstacles, t);
+}
+
+std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicObstacleSet& obstacles) {
+  const double c0 = std::cos(start.theta), s0 = std::sin(start.theta);
+  std::uint8_t best = 0;
+  for (std::size_t a = 0; a < actions_.size(); ++a) {
+    const ArcVelocities vel = arcVelocities(start, actions_[a], config_.dt, limits_);
+    const double c = std::cos(vel.w_mid * config_.dt), sn = std::sin(vel.w_mid * config_.dt);
+    const ArcMotion motion = makeArcMotion(start, c0, s0, vel.v_mid, vel.w_mid, config_.dt, c, sn);
+    const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, vel.w_end};
+    std::uint8_t tier = 0;
+    if (collision_.motionFreeStatic(motion) && collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0) &&
+        brakeFree(child, config_.dt, braking_obstacles_, true)) {
+      tier = 1;
+      // Passive safety: the same stop against the obstacles at constant velocity.
+      if (config_.passive_safety && (obstacles.size() == 0 || brakeFree(child, config_.dt, obstacles, false))) tier = 2;
+    }
+    root_ok_[a] = tier;
+    best = std::max(best, tier);
+  }
+  return best;
+}
+
+Action StaaStar::safeStop(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles) {
+  map_ = &map;
+  collision_.prepare(map);
+  braking_obstacles_.copyFrom(obstacles);
+  const std::uint8_t tier = markBrakeSafe(start, obstacles);
+  if (tier == 0) return brakeAction(start, limits_, config_.dt);
+  // The allowed action that leaves the least speed (both velocities relative to their limits).
+  double best_cost = 0.0;
+  std::size_t best = actions_.size();
+  for (std::size_t a = 0; a < actions_.size(); ++a) {
+    if (root_ok_[a] < tier) continue;
+    const ArcVelocities vel = arcVelocities(start, actions_[a], config_.dt, limits_);
+    const double cost = std::abs(vel.v_end) / std::max(limits_.v_max, -limits_.v_min) + std::abs(vel.w_end) / limits_.w_max;
+    if (best == actions_.size() || cost < best_cost) {
+      best_cost = cost;
+      best = a;
+    }
+  }
+  return actions_[best];
 }
 
 PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
@@ -134,7 +176,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   box_behind_ = map.config().behind_m;
   box_side_ = map.config().side_m;
   collision_.prepare(map);
-  heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map, &collision_);
+  heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map, &collision_, budget.deadline());
   nodes_.clear();
   queue_.clear();
   trajectory_.clear();
@@ -152,26 +194,18 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   std::int32_t best = 0;
   result.outcome = PlanResult::Outcome::kExhausted;
 
-  // Braking safety of the first actions (see StaaConfig::brake_safety).
-  bool restrict_root = false;
+  // Braking safety of the first actions (see StaaConfig::brake_safety): only the actions of
+  // the strictest tier that any action reaches are allowed; all when none passes.
+  std::uint8_t root_tier = 0;
   if (config_.brake_safety) {
     braking_obstacles_.copyFrom(obstacles);
-    const double c0 = std::cos(start.theta), s0 = std::sin(start.theta);
-    std::size_t safe = 0;
-    for (std::size_t a = 0; a < actions_.size(); ++a) {
-      const ArcVelocities vel = arcVelocities(start, actions_[a], config_.dt, limits_);
-      const double c = std::cos(vel.w_mid * config_.dt), sn = std::sin(vel.w_mid * config_.dt);
-      const ArcMotion motion = makeArcMotion(start, c0, s0, vel.v_mid, vel.w_mid, config_.dt, c, sn);
-      const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, vel.w_end};
-      const bool ok = collision_.motionFreeStatic(motion) &&
-                      collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0) &&
-                      brakeFree(child, config_.dt);
-      root_ok_[a] = ok ? 1 : 0;
-      safe += ok ? 1 : 0;
-    }
-    restrict_root = safe > 0;
-    result.brake_safe_actions = static_cast<std::uint32_t>(safe);
+    root_tier = markBrakeSafe(start, obstacles);
+    std::size_t allowed = 0;
+    for (std::size_t a = 0; a < actions_.size(); ++a) allowed += root_ok_[a] >= root_tier ? 1 : 0;
+    result.brake_safe_actions = root_tier > 0 ? static_cast<std::uint32_t>(allowed) : 0;
+    result.brake_safety_tier = root_tier;
   }
+  const bool restrict_root = root_tier > 0;
 
   while (!queue_.empty()) {
     // Checked on every pop (paper, Sec. III-E-6).
@@ -230,7 +264,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     }
     for (std::size_t a = 0; a < actions_.size(); ++a) {
       ++st.successors;
-      if (restrict_root && id == 0 && root_ok_[a] == 0) {
+      if (restrict_root && id == 0 && root_ok_[a] < root_tier) {
         ++st.collisions;  // could not brake safely after it
         continue;
       }

@@ -55,6 +55,13 @@ struct StaaConfig {
   // does when it sees us). When no first action passes, all are allowed and the search decides
   // (braking alone would not help: something that does not brake reaches the robot anyway).
   bool brake_safety = true;
+  // A stricter tier of the same rule, preferred whenever some first action passes it: the
+  // robot can brake to a stop after the action before any moving obstacle, kept at constant
+  // velocity, reaches its path (passive safety: the robot does not drive into anything that
+  // keeps going). Without it two robots that each expect the other to brake kept their speed
+  // into a head-on meeting until no first action was safe any more (the 5-agent apartment
+  // runs of docs/results.md).
+  bool passive_safety = true;
   double obstacle_reaction_s = 0.3;
   double obstacle_brake_decel = 2.0;  // m/s^2
   double brake_step_s = 0.15;         // the braking manoeuvre is checked in steps of this
@@ -82,7 +89,8 @@ struct PlanResult {
   Action first_action;        // to apply until the next cycle
   UnicycleState best;         // the state the plan leads to
   double best_h = 0.0;
-  std::uint32_t brake_safe_actions = 0;  // first actions that passed the braking check
+  std::uint32_t brake_safe_actions = 0;  // first actions allowed by the braking check
+  std::uint8_t brake_safety_tier = 0;    // 2: passive safety, 1: braking hypothesis, 0: none passed
   int depth = 0;              // depth of that state
   PlanStats stats;
   std::span<const UnicycleState> trajectory;  // root .. best, valid until the next plan()
@@ -102,6 +110,13 @@ class StaaStar {
   // must be updated for this cycle. `obstacles` holds D at the cycle's time (t = 0).
   PlanResult plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
                   PlannerBudget budget);
+
+  // A stop that steers clear: among the first actions that pass the braking check (the
+  // strictest tier any passes), the one that slows the robot most; the plain brake when none
+  // passes. For when there is no path to follow but the robot is still moving (braking
+  // straight ahead can run into what the plan was steering around). `map` must be updated
+  // for this cycle. No allocation.
+  Action safeStop(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles);
 
   // Visits the search tree of the last plan (parent, child) for drawing.
   template <typename Visitor>
@@ -134,7 +149,11 @@ class StaaStar {
   bool closedIndex(double x, double y, double theta, std::size_t& index) const;
   // Whether braking at the limits from `s` (at time t0) to a stop, and standing there until
   // every obstacle has stopped, stays free of the map and of braking_obstacles_.
-  bool brakeFree(const UnicycleState& s, double t0) const;
+  // With `stand` false only the braking is checked, against `obstacles` as they are given.
+  bool brakeFree(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand) const;
+  // Fills root_ok_ with each first action's tier (0..2) from `start`; returns the best tier
+  // any action reached (braking_obstacles_ must hold this cycle's copy).
+  std::uint8_t markBrakeSafe(const UnicycleState& start, const DynamicObstacleSet& obstacles);
   void push(std::int32_t node);
   std::int32_t pop();
 

@@ -164,3 +164,53 @@ TEST(MinimalConstruct, MatchesBruteForceVisibilityGraphOnRandomMaps) {
 
 }  // namespace
 }  // namespace staa
+
+namespace staa {
+namespace {
+
+// A clock that advances by a fixed step on every read: a deadline passes after a known
+// number of checks.
+std::int64_t g_fake_ns = 0;
+std::int64_t fakeClock() { return g_fake_ns += 1000; }
+
+TEST(MinimalConstructDeadline, APassedDeadlineAbortsAndTheNextQueryResumesToTheSamePath) {
+  // A maze of staggered walls: the path needs many expansions.
+  std::vector<Polygon> walls;
+  for (int k = 0; k < 12; ++k) {
+    const double x = 2.0 + 2.0 * k;
+    if (k % 2 == 0) walls.push_back({{x, 0.0}, {x + 0.2, 0.0}, {x + 0.2, 8.0}, {x, 8.0}});
+    else walls.push_back({{x, 2.0}, {x + 0.2, 2.0}, {x + 0.2, 10.0}, {x, 10.0}});
+  }
+  MinimalConstruct fresh = makeSearch(walls);
+  const MinimalConstruct::Result reference = fresh.query({1.0, 5.0}, {27.0, 5.0}, false);
+  ASSERT_EQ(reference.status, MinimalConstruct::Status::kFound);
+  const double reference_length = reference.length;
+  ASSERT_GT(reference.expansions, 20u);
+
+  MinimalConstruct mc = makeSearch(walls);
+  g_fake_ns = 0;
+  const Deadline already{&fakeClock, 0};  // passed at the first check
+  const MinimalConstruct::Result aborted = mc.query({1.0, 5.0}, {27.0, 5.0}, false, already);
+  EXPECT_EQ(aborted.status, MinimalConstruct::Status::kAborted);
+  EXPECT_TRUE(aborted.path.empty());
+
+  // A deadline that passes after a few checks: some progress, still aborted.
+  g_fake_ns = 0;
+  const Deadline soon{&fakeClock, 2500};  // the third check
+  const MinimalConstruct::Result partial = mc.query({1.0, 5.0}, {27.0, 5.0}, false, soon);
+  EXPECT_EQ(partial.status, MinimalConstruct::Status::kAborted);
+
+  // Without a deadline the kept tree is resumed: the same shortest path as a fresh search.
+  const MinimalConstruct::Result resumed = mc.query({1.0, 5.0}, {27.0, 5.0}, false);
+  ASSERT_EQ(resumed.status, MinimalConstruct::Status::kFound);
+  EXPECT_NEAR(resumed.length, reference_length, 1e-9);
+  // And from another start, too (the tree is valid for the goal).
+  const MinimalConstruct::Result other = mc.query({3.0, 9.0}, {27.0, 5.0}, false);
+  MinimalConstruct fresh2 = makeSearch(walls);
+  const MinimalConstruct::Result other_ref = fresh2.query({3.0, 9.0}, {27.0, 5.0}, false);
+  ASSERT_EQ(other.status, MinimalConstruct::Status::kFound);
+  EXPECT_NEAR(other.length, other_ref.length, 1e-9);
+}
+
+}  // namespace
+}  // namespace staa
