@@ -41,6 +41,10 @@ struct BaseStatus {
   bool enabled = false;
   BaseFault fault = BaseFault::kNone;
   std::uint32_t fault_code = 0;  // the base's own code, 0 when none
+  // Link health totals since start (hal/socketcan; 0 for backends without a bus).
+  std::uint64_t bad_frames = 0;    // frames dropped as malformed (ID, DLC, checksum, range, ...)
+  std::uint64_t rx_overflows = 0;  // frames the kernel dropped on a full receive queue
+  std::uint64_t error_frames = 0;  // CAN error frames received
 };
 
 struct VelocityCommand {

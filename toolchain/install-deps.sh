@@ -10,6 +10,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
   librsvg2-bin   # rsvg-convert: SVG -> PNG for the README picture and experiment plots
+  libopenni2-dev # OpenNI2: the HSR's head Xtion (hal/openni2, built only when found)
 )
 
 missing=()

@@ -1,0 +1,413 @@
+#include "perception/depth_obstacles.hpp"
+
+#include "geometry/convex.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace staa {
+namespace {
+
+// Grids beyond this many cells a side are a configuration mistake (4 million cells).
+constexpr int kMaxGridSide = 2000;
+constexpr std::int32_t kNoRow = std::numeric_limits<std::int32_t>::max();
+
+[[noreturn]] void bad(const char* field, double value, const char* rule) {
+  throw std::invalid_argument(std::string("depth obstacles: config.") + field + " must be " + rule + ", got " +
+                              std::to_string(value));
+}
+
+bool finitePositive(double v) { return v > 0.0 && std::isfinite(v); }
+
+}  // namespace
+
+// The constant-velocity Kalman filter of a track (the same gain for x and y): predict over
+// dt with white acceleration noise, then update with the measured centroid.
+void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, double dt) const {
+  const double q = config_.acceleration_mps2 * config_.acceleration_mps2;
+  const double dt2 = dt * dt;
+  const double p00 = tr.p00 + 2.0 * dt * tr.p01 + dt2 * tr.p11 + q * dt2 * dt2 / 4.0;
+  const double p01 = tr.p01 + dt * tr.p11 + q * dt2 * dt / 2.0;
+  const double p11 = tr.p11 + q * dt2;
+  const double innovation_var = p00 + config_.centroid_noise_m * config_.centroid_noise_m;
+  const double k0 = p00 / innovation_var, k1 = p01 / innovation_var;
+  const Vec2 innovation = measured - (tr.centroid + tr.velocity * dt);
+  tr.centroid += tr.velocity * dt + k0 * innovation;
+  tr.velocity += k1 * innovation;
+  tr.p00 = (1.0 - k0) * p00;
+  tr.p01 = (1.0 - k0) * p01;
+  tr.p11 = p11 - k1 * p01;
+  const double speed = tr.velocity.norm();
+  if (speed > config_.max_speed_mps) tr.velocity *= config_.max_speed_mps / speed;
+}
+
+void validateDepthObstaclesConfig(const DepthObstaclesConfig& c) {
+  if (c.pixel_stride < 1 || c.pixel_stride > 16) bad("pixel_stride", c.pixel_stride, "in 1..16");
+  if (!(c.min_depth_m >= 0.0) || !std::isfinite(c.min_depth_m)) bad("min_depth_m", c.min_depth_m, "finite and >= 0 (m)");
+  if (!finitePositive(c.max_range_m)) bad("max_range_m", c.max_range_m, "finite and > 0 (m)");
+  if (!std::isfinite(c.min_height_m)) bad("min_height_m", c.min_height_m, "finite (m)");
+  if (!(c.max_height_m > c.min_height_m) || !std::isfinite(c.max_height_m)) {
+    bad("max_height_m", c.max_height_m, "finite and > min_height_m (m)");
+  }
+  if (!finitePositive(c.cell_m)) bad("cell_m", c.cell_m, "finite and > 0 (m)");
+  if (c.max_range_m / c.cell_m > kMaxGridSide / 2 - 2) {
+    bad("cell_m", c.cell_m, "large enough for max_range_m (at most 1000 cells of range)");
+  }
+  if (c.min_points_per_cell < 1) bad("min_points_per_cell", c.min_points_per_cell, ">= 1");
+  if (c.min_cluster_points < 1) bad("min_cluster_points", c.min_cluster_points, ">= 1");
+  if (!(c.cluster_gap_m >= c.cell_m && c.cluster_gap_m <= 5.0 * c.cell_m)) {
+    bad("cluster_gap_m", c.cluster_gap_m, "in [cell_m, 5 * cell_m] (m)");
+  }
+  if (!(c.static_margin_m >= 0.0) || !std::isfinite(c.static_margin_m)) {
+    bad("static_margin_m", c.static_margin_m, "finite and >= 0 (m)");
+  }
+  if (c.max_vertices < 4 || c.max_vertices > hal::ObstacleFrame::kMaxVertices) {
+    bad("max_vertices", static_cast<double>(c.max_vertices), "in 4..32 (ObstacleFrame::kMaxVertices)");
+  }
+  if (!finitePositive(c.gate_m)) bad("gate_m", c.gate_m, "finite and > 0 (m)");
+  if (!finitePositive(c.centroid_noise_m)) bad("centroid_noise_m", c.centroid_noise_m, "finite and > 0 (m)");
+  if (!finitePositive(c.acceleration_mps2)) bad("acceleration_mps2", c.acceleration_mps2, "finite and > 0 (m/s^2)");
+  if (!finitePositive(c.max_speed_mps)) bad("max_speed_mps", c.max_speed_mps, "finite and > 0 (m/s)");
+  if (c.max_missed_frames < 0) bad("max_missed_frames", c.max_missed_frames, ">= 0");
+  if (!finitePositive(c.max_frame_gap_s)) bad("max_frame_gap_s", c.max_frame_gap_s, "finite and > 0 (s)");
+}
+
+namespace {
+const DepthObstaclesConfig& validated(const DepthObstaclesConfig& c) {
+  validateDepthObstaclesConfig(c);
+  return c;
+}
+}  // namespace
+
+DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::CameraIntrinsics& intrinsics,
+                                             const hal::CameraMount& mount, const DepthObstaclesConfig& config)
+    : config_(validated(config)),
+      camera_(intrinsics, mount),
+      mask_(map, config.cell_m, config.static_margin_m) {
+  // The sampled rays and, per ray, the depths whose points are in the band and in range.
+  const Vec3& c = camera_.position();
+  const int s = config_.pixel_stride;
+  rays_.reserve(static_cast<std::size_t>((hal::DepthFrame::kWidth / s + 1) * (hal::DepthFrame::kHeight / s + 1)));
+  for (int v = s / 2; v < hal::DepthFrame::kHeight; v += s) {
+    for (int u = s / 2; u < hal::DepthFrame::kWidth; u += s) {
+      const Vec3 r = camera_.ray(u, v);
+      double lo = config_.min_depth_m;
+      double hi = 65.535;  // the largest depth a frame can hold
+      const double horizontal = std::hypot(r.x(), r.y());
+      if (horizontal > 0.0) hi = std::min(hi, config_.max_range_m / horizontal);
+      if (r.z() > 0.0) {
+        lo = std::max(lo, (config_.min_height_m - c.z()) / r.z());
+        hi = std::min(hi, (config_.max_height_m - c.z()) / r.z());
+      } else if (r.z() < 0.0) {
+        lo = std::max(lo, (config_.max_height_m - c.z()) / r.z());
+        hi = std::min(hi, (config_.min_height_m - c.z()) / r.z());
+      } else if (c.z() < config_.min_height_m || c.z() > config_.max_height_m) {
+        continue;
+      }
+      const double lo_mm = std::max(1.0, std::ceil(lo * 1000.0));
+      const double hi_mm = std::min(65535.0, std::floor(hi * 1000.0));
+      if (lo_mm > hi_mm) continue;  // this pixel never sees anything in the band
+      rays_.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
+                          static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u), static_cast<std::uint16_t>(lo_mm),
+                          static_cast<std::uint16_t>(hi_mm)});
+    }
+  }
+  // The grid reaches max_range_m from the camera wherever the camera sits on the robot.
+  const double reach = config_.max_range_m + std::hypot(mount.x, mount.y);
+  n_ = 2 * (static_cast<int>(std::ceil(reach / config_.cell_m)) + 1);
+  link_ = static_cast<int>(std::floor(config_.cluster_gap_m / config_.cell_m + 1e-9));
+  if (n_ > kMaxGridSide) bad("max_range_m", config_.max_range_m, "small enough (with the mount's offset) for the grid");
+  const auto cells = static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_);
+  count_.assign(cells, 0);
+  sum_x_.assign(cells, 0.0F);
+  sum_y_.assign(cells, 0.0F);
+  label_.assign(cells, -1);
+  queue_.assign(cells, 0);
+  row_min_.assign(static_cast<std::size_t>(n_), kNoRow);
+  row_max_.assign(static_cast<std::size_t>(n_), -1);
+  rows_.assign(static_cast<std::size_t>(n_), 0);
+  corners_.assign(4 * static_cast<std::size_t>(n_), Vec2::Zero());
+  hull_.assign(4 * static_cast<std::size_t>(n_) + 1, Vec2::Zero());
+}
+
+void DepthObstacleDetector::resetTracks() {
+  for (Track& t : tracks_) t = Track{};
+  last_stamp_ = -1;
+}
+
+DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame, const Pose2& robot,
+                                                   hal::ObstacleFrame& out) {
+  DepthObstaclesStats stats;
+  out.stamp = frame.stamp;
+  out.sequence = frame.sequence;
+  out.count = 0;
+  out.dropped = 0;
+  backProject(frame, robot, stats);
+  findClusters(robot, stats);
+  outlineClusters(out);
+  trackClusters(frame.stamp, out);
+  out.dropped = stats.clusters - out.count;
+  for (const Track& t : tracks_) stats.tracks += t.live ? 1 : 0;
+  return stats;
+}
+
+// Step 1: pixels -> points in the band -> counts (and point sums) per grid cell.
+void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const Pose2& robot, DepthObstaclesStats& stats) {
+  const double cell = config_.cell_m;
+  gi0_ = mask_.cellIndex(robot.x) - n_ / 2;
+  gj0_ = mask_.cellIndex(robot.y) - n_ / 2;
+  origin_ = Vec2(static_cast<double>(gi0_) * cell, static_cast<double>(gj0_) * cell);
+  std::fill(count_.begin(), count_.end(), std::uint16_t{0});
+  std::fill(sum_x_.begin(), sum_x_.end(), 0.0F);
+  std::fill(sum_y_.begin(), sum_y_.end(), 0.0F);
+
+  // In grid units: the camera's position, and each ray's turn by the robot's heading.
+  const double inv_cell = 1.0 / cell;
+  const Vec2 camera = robot.transform(camera_.position().head<2>());
+  const double ax = (camera.x() - origin_.x()) * inv_cell, ay = (camera.y() - origin_.y()) * inv_cell;
+  const double c = std::cos(robot.theta) * inv_cell * 0.001, s = std::sin(robot.theta) * inv_cell * 0.001;
+  const double n = n_;
+  std::size_t points = 0;
+  for (const Ray& r : rays_) {
+    const std::uint16_t d_mm = frame.depth_mm[r.pixel];
+    if (d_mm < r.min_mm || d_mm > r.max_mm) continue;
+    const double d = d_mm;
+    const double gx = ax + d * (c * r.x - s * r.y);
+    const double gy = ay + d * (s * r.x + c * r.y);
+    if (!(gx >= 0.0 && gx < n && gy >= 0.0 && gy < n)) continue;
+    const std::size_t k = static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) + static_cast<std::size_t>(gx);
+    if (count_[k] == std::numeric_limits<std::uint16_t>::max()) continue;
+    ++count_[k];
+    sum_x_[k] += static_cast<float>(gx);
+    sum_y_[k] += static_cast<float>(gy);
+    ++points;
+  }
+  stats.points = points;
+}
+
+// Step 2: occupied cells the map does not explain, linked into clusters (cells at most
+// link_ cells apart along x and y).
+void DepthObstacleDetector::findClusters(const Pose2& robot, DepthObstaclesStats& stats) {
+  const int n = n_;
+  for (int gy = 0; gy < n; ++gy) {
+    for (int gx = 0; gx < n; ++gx) {
+      const std::size_t k = static_cast<std::size_t>(gy) * static_cast<std::size_t>(n) + static_cast<std::size_t>(gx);
+      label_[k] = -1;
+      if (count_[k] < config_.min_points_per_cell) continue;
+      ++stats.occupied_cells;
+      if (mask_.blocked(gi0_ + gx, gj0_ + gy)) {
+        ++stats.map_cells;
+        continue;
+      }
+      label_[k] = 0;
+    }
+  }
+
+  cluster_count_ = 0;
+  std::uint32_t tail = 0;
+  std::int32_t next_label = 1;
+  for (std::uint32_t seed = 0; seed < static_cast<std::uint32_t>(n * n); ++seed) {
+    if (label_[seed] != 0) continue;
+    const std::int32_t id = next_label++;
+    const std::uint32_t first = tail;
+    label_[seed] = id;
+    queue_[tail++] = seed;
+    std::uint64_t points = 0;
+    double sx = 0.0, sy = 0.0;
+    for (std::uint32_t head = first; head < tail; ++head) {
+      const std::uint32_t k = queue_[head];
+      points += count_[k];
+      sx += sum_x_[k];
+      sy += sum_y_[k];
+      const int gx = static_cast<int>(k % static_cast<std::uint32_t>(n));
+      const int gy = static_cast<int>(k / static_cast<std::uint32_t>(n));
+      for (int dy = -link_; dy <= link_; ++dy) {
+        for (int dx = -link_; dx <= link_; ++dx) {
+          const int x = gx + dx, y = gy + dy;
+          if ((dx == 0 && dy == 0) || x < 0 || y < 0 || x >= n || y >= n) continue;
+          const auto m = static_cast<std::uint32_t>(y * n + x);
+          if (label_[m] != 0) continue;
+          label_[m] = id;
+          queue_[tail++] = m;
+        }
+      }
+    }
+    if (points < static_cast<std::uint64_t>(config_.min_cluster_points)) continue;
+    ++stats.clusters;
+    if (cluster_count_ == kMaxClusters) continue;  // counted, not measured
+    Cluster& cl = clusters_[cluster_count_++];
+    cl.first = first;
+    cl.last = tail;
+    cl.points = static_cast<std::uint32_t>(std::min<std::uint64_t>(points, UINT32_MAX));
+    const double inv = 1.0 / static_cast<double>(points);
+    cl.centroid = origin_ + config_.cell_m * Vec2(sx * inv, sy * inv);
+    cl.distance = (cl.centroid - robot.position()).norm();
+    cl.track = -1;
+  }
+
+  // The nearest kMaxObstacles, nearest first (ties in scan order, so the result is the same
+  // on every run).
+  for (std::size_t i = 0; i < cluster_count_; ++i) order_[i] = static_cast<std::uint16_t>(i);
+  const auto nearer = [this](std::uint16_t a, std::uint16_t b) {
+    if (clusters_[a].distance != clusters_[b].distance) return clusters_[a].distance < clusters_[b].distance;
+    return a < b;
+  };
+  kept_ = std::min(cluster_count_, hal::ObstacleFrame::kMaxObstacles);
+  const auto begin = order_.begin();
+  const auto end = order_.begin() + static_cast<std::ptrdiff_t>(cluster_count_);
+  if (cluster_count_ > kept_) std::nth_element(begin, begin + static_cast<std::ptrdiff_t>(kept_), end, nearer);
+  std::sort(begin, begin + static_cast<std::ptrdiff_t>(kept_), nearer);
+}
+
+// Step 3: a convex polygon per kept cluster.
+void DepthObstacleDetector::outlineClusters(hal::ObstacleFrame& out) {
+  out.count = 0;
+  for (std::size_t i = 0; i < kept_; ++i) {
+    hal::ObstacleFrame::Obstacle& o = out.obstacles[out.count++];
+    o.n = outline(clusters_[order_[i]], o.vertices);
+    o.velocity = Vec2::Zero();
+  }
+}
+
+std::size_t DepthObstacleDetector::outline(const Cluster& cluster, std::span<Vec2> out) {
+  // Per grid row of the cluster, its leftmost and rightmost cell: the hull of those rows'
+  // outer corners is the hull of every cell's corners.
+  std::size_t rows = 0;
+  for (std::uint32_t q = cluster.first; q < cluster.last; ++q) {
+    const std::uint32_t k = queue_[q];
+    const auto gx = static_cast<std::int32_t>(k % static_cast<std::uint32_t>(n_));
+    const auto gy = static_cast<std::size_t>(k / static_cast<std::uint32_t>(n_));
+    if (row_min_[gy] == kNoRow) rows_[rows++] = static_cast<std::int32_t>(gy);
+    row_min_[gy] = std::min(row_min_[gy], gx);
+    row_max_[gy] = std::max(row_max_[gy], gx);
+  }
+  const double cell = config_.cell_m;
+  std::size_t m = 0;
+  for (std::size_t r = 0; r < rows; ++r) {
+    const auto gy = static_cast<std::size_t>(rows_[r]);
+    const double x0 = origin_.x() + cell * row_min_[gy];
+    const double x1 = origin_.x() + cell * (row_max_[gy] + 1);
+    const double y0 = origin_.y() + cell * static_cast<double>(gy);
+    const double y1 = y0 + cell;
+    corners_[m++] = Vec2(x0, y0);
+    corners_[m++] = Vec2(x1, y0);
+    corners_[m++] = Vec2(x1, y1);
+    corners_[m++] = Vec2(x0, y1);
+    row_min_[gy] = kNoRow;
+    row_max_[gy] = -1;
+  }
+  std::size_t hull_n = convexHullInPlace(std::span<Vec2>(corners_.data(), m), std::span<Vec2>(hull_));
+  hull_n = growToFewerVertices(std::span<Vec2>(hull_), hull_n, config_.max_vertices);
+  hull_n = std::min(hull_n, out.size());
+  std::copy_n(hull_.begin(), hull_n, out.begin());
+  return hull_n;
+}
+
+// Step 4: clusters continue the nearest predicted track within the gate (greedy, closest
+// pair first); a constant-velocity Kalman filter on the centroid gives the velocity.
+void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out) {
+  if (last_stamp_ >= 0 && (stamp <= last_stamp_ ||
+                           static_cast<double>(stamp - last_stamp_) * 1e-9 > config_.max_frame_gap_s)) {
+    resetTracks();
+  }
+  last_stamp_ = stamp;
+
+  std::array<Vec2, kMaxTracks> predicted{};
+  std::array<bool, kMaxTracks> taken{};
+  for (std::size_t t = 0; t < kMaxTracks; ++t) {
+    if (!tracks_[t].live) continue;
+    const double dt = static_cast<double>(stamp - tracks_[t].seen) * 1e-9;
+    predicted[t] = tracks_[t].centroid + tracks_[t].velocity * dt;
+  }
+  for (std::size_t i = 0; i < kept_; ++i) clusters_[order_[i]].track = -1;
+
+  const double gate2 = config_.gate_m * config_.gate_m;
+  for (;;) {
+    double best = gate2;
+    std::size_t best_i = kept_, best_t = kMaxTracks;
+    for (std::size_t i = 0; i < kept_; ++i) {
+      const Cluster& cl = clusters_[order_[i]];
+      if (cl.track >= 0) continue;
+      for (std::size_t t = 0; t < kMaxTracks; ++t) {
+        if (!tracks_[t].live || taken[t]) continue;
+        const double d2 = (cl.centroid - predicted[t]).squaredNorm();
+        if (d2 <= best) {
+          best = d2;
+          best_i = i;
+          best_t = t;
+        }
+      }
+    }
+    if (best_i == kept_) break;
+    Cluster& cl = clusters_[order_[best_i]];
+    Track& tr = tracks_[best_t];
+    taken[best_t] = true;
+    cl.track = static_cast<int>(best_t);
+    filterCentroid(tr, cl.centroid, static_cast<double>(stamp - tr.seen) * 1e-9);
+    tr.seen = stamp;
+    tr.missed = 0;
+  }
+
+  // Tracks not seen this frame age; new clusters start tracks at rest.
+  for (std::size_t t = 0; t < kMaxTracks; ++t) {
+    if (!tracks_[t].live || taken[t]) continue;
+    if (++tracks_[t].missed > config_.max_missed_frames) tracks_[t] = Track{};
+  }
+  for (std::size_t i = 0; i < kept_; ++i) {
+    Cluster& cl = clusters_[order_[i]];
+    if (cl.track >= 0) {
+      out.obstacles[i].velocity = tracks_[static_cast<std::size_t>(cl.track)].velocity;
+      continue;
+    }
+    for (std::size_t t = 0; t < kMaxTracks; ++t) {
+      if (tracks_[t].live) continue;
+      // At rest, its position known to the centroid's noise, its velocity to about half the
+      // largest speed.
+      const double r = config_.centroid_noise_m, v = 0.5 * config_.max_speed_mps;
+      tracks_[t] = Track{true, cl.centroid, Vec2::Zero(), r * r, 0.0, v * v, stamp, 0};
+      cl.track = static_cast<int>(t);
+      break;
+    }
+    out.obstacles[i].velocity = Vec2::Zero();
+  }
+}
+
+std::size_t growToFewerVertices(std::span<Vec2> p, std::size_t n, std::size_t max_n) {
+  max_n = std::max<std::size_t>(max_n, 4);
+  n = std::min(n, p.size());
+  while (n > max_n) {
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t best_i = n;
+    Vec2 best_point(0.0, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2& prev = p[(i + n - 1) % n];
+      const Vec2& a = p[i];
+      const Vec2& b = p[(i + 1) % n];
+      const Vec2& next = p[(i + 2) % n];
+      const Vec2 da = a - prev, db = next - b;
+      const double den = cross(da, db);
+      // The neighbours' lines must meet beyond the edge (together they turn less than pi).
+      if (!(den > 1e-12 * da.norm() * db.norm())) continue;
+      const double s = cross(b - a, db) / den;
+      if (s < 0.0) continue;
+      const Vec2 meet = a + s * da;
+      const double added = 0.5 * std::abs(cross(b - a, meet - a));
+      if (added < best) {
+        best = added;
+        best_i = i;
+        best_point = meet;
+      }
+    }
+    if (best_i == n) break;  // no edge can go (not for a convex polygon of > 4 vertices)
+    p[best_i] = best_point;
+    const std::size_t gone = (best_i + 1) % n;
+    for (std::size_t k = gone; k + 1 < n; ++k) p[k] = p[k + 1];
+    --n;
+  }
+  return n;
+}
+
+}  // namespace staa

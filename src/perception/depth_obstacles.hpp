@@ -1,0 +1,186 @@
+#pragma once
+// Depth perception (ARCHITECTURE.md sections 2-3, the perception thread): one depth frame and
+// the robot's pose in the map become the moving (unmapped) obstacles D as convex polygons in
+// the map frame with velocities, the ObstacleFrame the control thread plans against.
+//
+// The steps, one function each, in the order process() calls them:
+//   1. backProject:     every pixel_stride-th pixel of every pixel_stride-th row through the
+//                       pinhole model and the mount (CameraModel) into the base frame; points
+//                       in the height band above the floor and within range go into a 2-D
+//                       occupancy grid around the robot, aligned with the map's axes;
+//   2. findClusters:    occupied cells that the static map does not explain (StaticMapMask),
+//                       linked into clusters when at most cluster_gap_m apart; the nearest
+//                       kMaxObstacles are kept;
+//   3. outlineClusters: one convex polygon per cluster, the hull of its cells' corners (the
+//                       hull of the cell centres grown by half a cell), conservatively reduced
+//                       to max_vertices (it only grows);
+//   4. trackClusters:   each cluster is matched to the nearest predicted track within a gate;
+//                       a constant-velocity Kalman filter on its point centroid gives the
+//                       velocity (the smoothed displacement over the time between frames); a
+//                       new track starts at 0 m/s.
+//
+// Everything is sized at construction (the PerceptionWorkspace of STYLE.md is this object);
+// process() allocates nothing, throws nothing and takes time linear in the sampled pixels and
+// the grid's cells.
+
+#include "geometry/types.hpp"
+#include "hal/depth_camera.hpp"
+#include "hal/obstacles.hpp"
+#include "map/polygon_map.hpp"
+#include "perception/camera_model.hpp"
+#include "perception/static_map_mask.hpp"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace staa {
+
+struct DepthObstaclesConfig {
+  // Pixels: every pixel_stride-th column of every pixel_stride-th row (1..16). At 4 the
+  // 640 x 480 frame gives 160 x 120 rays, 2.8 cm apart at 4 m: several per 10 cm cell.
+  int pixel_stride = 4;
+  // Depth readings nearer than this are the Xtion's near-range noise (its spec: 0.8 m;
+  // in practice it returns usable depth from ~0.5 m; 0 is "no reading" anyway).
+  double min_depth_m = 0.45;
+  // Horizontal distance from the camera beyond which points are ignored: the depth error
+  // grows with the square of the distance (a few cm at 4 m).
+  double max_range_m = 4.5;
+  // The height band (m above the floor) of points that can touch the base: below it is the
+  // floor and its noise, above it ceiling and lamps.
+  double min_height_m = 0.05;
+  double max_height_m = 1.8;
+  // Occupancy grid cells (m); the grid spans max_range_m (plus the mount's offset) around the
+  // robot in every direction.
+  double cell_m = 0.1;
+  // A cell is occupied with at least this many points (isolated noisy pixels are not).
+  int min_points_per_cell = 3;
+  // A cluster with fewer points in all is noise and not reported.
+  int min_cluster_points = 8;
+  // Occupied cells whose centres are at most this far apart (along x and along y) belong to
+  // one cluster: one cell (0.1 m) is 8-connectivity. 0.3 m bridges up to two empty cells
+  // between the sparse columns of points on a surface seen at a grazing angle (a box's side
+  // face: at 0.2 m a walking box split in two in the corridor test), at the price of merging
+  // things less than ~0.2 m apart (conservative: one bigger polygon, one velocity).
+  double cluster_gap_m = 0.3;
+  // Cells within this distance of the map's obstacles (or outside its bounds) are the map's
+  // (walls seen through depth noise and localisation error are not moving obstacles). It
+  // hides a real obstacle standing closer than this to a wall, too.
+  double static_margin_m = 0.15;
+  // Vertices per polygon (4..ObstacleFrame::kMaxVertices): larger hulls grow to fewer.
+  std::size_t max_vertices = 16;
+  // A cluster continues a track whose predicted centroid lies within this distance (m).
+  double gate_m = 0.5;
+  // Velocities come from a constant-velocity Kalman filter per track on the clusters' point
+  // centroids. centroid_noise_m: how much a centroid jitters from frame to frame (depth noise,
+  // and parts of a surface coming into or going out of view as things move).
+  double centroid_noise_m = 0.03;
+  // How quickly an obstacle may change its velocity (m/s^2; people: about 1).
+  double acceleration_mps2 = 1.0;
+  // Speeds are clamped to this (m/s): faster is an association slip, not a person.
+  double max_speed_mps = 2.5;
+  // A track unseen for more frames than this is forgotten.
+  int max_missed_frames = 5;
+  // A gap between frame stamps longer than this (or a stamp going backwards) forgets every
+  // track: the velocities would be stale.
+  double max_frame_gap_s = 0.5;
+};
+
+// Throws std::invalid_argument naming the field and its value.
+void validateDepthObstaclesConfig(const DepthObstaclesConfig& config);
+
+// What one frame produced (for telemetry and tests).
+struct DepthObstaclesStats {
+  std::size_t points = 0;          // points in the height band and range, inside the grid
+  std::size_t occupied_cells = 0;  // cells with >= min_points_per_cell points
+  std::size_t map_cells = 0;       // ... of which the static map explains
+  std::size_t clusters = 0;        // clusters with >= min_cluster_points (before the cut)
+  std::size_t tracks = 0;          // live tracks after the frame
+};
+
+class DepthObstacleDetector {
+ public:
+  // Up to this many clusters per frame are measured; the nearest kMaxObstacles are reported.
+  static constexpr std::size_t kMaxClusters = 256;
+  static constexpr std::size_t kMaxTracks = 2 * hal::ObstacleFrame::kMaxObstacles;
+
+  // Throws std::invalid_argument for a bad config, intrinsics or mount (naming the field).
+  DepthObstacleDetector(const PolygonMap& map, const hal::CameraIntrinsics& intrinsics, const hal::CameraMount& mount,
+                        const DepthObstaclesConfig& config = {});
+
+  // One frame taken when the robot's base was at `robot` (map frame). Fills `out`: stamp and
+  // sequence from the frame, the obstacles nearest first. No allocation, no exception.
+  DepthObstaclesStats process(const hal::DepthFrame& frame, const Pose2& robot, hal::ObstacleFrame& out);
+
+  // Forgets every track (after a relocalisation, say): the next frame's velocities are 0.
+  void resetTracks();
+
+  const DepthObstaclesConfig& config() const { return config_; }
+  const CameraModel& camera() const { return camera_; }
+  const StaticMapMask& staticMask() const { return mask_; }
+  int gridSize() const { return n_; }
+
+ private:
+  // A sampled pixel: its ray in the base frame (optical z = 1) and the depths (mm) at which
+  // its point lies inside the height band and range, so the per-pixel test is two compares.
+  struct Ray {
+    float x, y;
+    std::uint32_t pixel;
+    std::uint16_t min_mm, max_mm;
+  };
+  struct Cluster {
+    std::uint32_t first = 0, last = 0;  // its cells: queue_[first, last)
+    std::uint32_t points = 0;
+    Vec2 centroid{0.0, 0.0};  // of its points, map frame
+    double distance = 0.0;    // centroid to the robot
+    int track = -1;
+  };
+  struct Track {
+    bool live = false;
+    Vec2 centroid{0.0, 0.0};  // filtered
+    Vec2 velocity{0.0, 0.0};
+    // The filter's covariance [position, velocity], the same for x and y (it depends only on
+    // the times of the measurements).
+    double p00 = 0.0, p01 = 0.0, p11 = 0.0;
+    rt::Nanos seen = 0;
+    int missed = 0;
+  };
+
+  void backProject(const hal::DepthFrame& frame, const Pose2& robot, DepthObstaclesStats& stats);
+  void findClusters(const Pose2& robot, DepthObstaclesStats& stats);
+  void outlineClusters(hal::ObstacleFrame& out);
+  void trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out);
+  std::size_t outline(const Cluster& cluster, std::span<Vec2> out);
+  void filterCentroid(Track& track, const Vec2& measured, double dt) const;
+
+  DepthObstaclesConfig config_;
+  CameraModel camera_;
+  StaticMapMask mask_;
+  std::vector<Ray> rays_;
+  int n_ = 0;                       // grid cells per side
+  int link_ = 1;                    // cluster_gap_m in cells
+  std::int64_t gi0_ = 0, gj0_ = 0;  // the grid's lower-left cell on the map lattice (this frame)
+  Vec2 origin_{0.0, 0.0};           // its corner in the map frame
+  std::vector<std::uint16_t> count_;
+  std::vector<float> sum_x_, sum_y_;  // point coordinates relative to origin_
+  std::vector<std::int32_t> label_;   // -1: no obstacle; 0: unvisited; > 0: cluster id
+  std::vector<std::uint32_t> queue_;  // flood fill queue, also the clusters' cell lists
+  std::vector<std::int32_t> row_min_, row_max_;
+  std::vector<std::int32_t> rows_;
+  std::vector<Vec2> corners_, hull_;
+  std::array<Cluster, kMaxClusters> clusters_{};
+  std::size_t cluster_count_ = 0;
+  std::array<std::uint16_t, kMaxClusters> order_{};
+  std::size_t kept_ = 0;
+  std::array<Track, kMaxTracks> tracks_{};
+  rt::Nanos last_stamp_ = -1;
+};
+
+// Grows a convex counter-clockwise polygon of n vertices (in place) to at most max_n >= 4
+// vertices that contain it: repeatedly the edge whose neighbours, extended to meet, add the
+// least area is replaced by their meeting point. Returns the new vertex count. No allocation.
+std::size_t growToFewerVertices(std::span<Vec2> polygon, std::size_t n, std::size_t max_n);
+
+}  // namespace staa
