@@ -248,10 +248,15 @@ void SocketCanBase::write(rt::Nanos now, const VelocityCommand& command) {
   const bool moves = commandMoves(frame);
   // At once: a brake that starts, or motion that stops; otherwise at the command rate.
   const bool urgent = (brake && !last_sent_brake_) || (!moves && last_sent_motion_);
-  if (urgent || last_command_tx_ < 0 || now - last_command_tx_ >= command_period_) {
+  // The rate is kept on a grid of command periods (not "a period since the last send"): the
+  // base I/O thread writes every 10 ms, and waiting a full period after each send would give
+  // 25 Hz instead of 30. A send that falls behind by more than a period restarts the grid.
+  if (urgent || last_command_tx_ < 0 || now >= next_command_tx_) {
     if (sendFrame(frame)) {
       ++command_counter_;
       last_command_tx_ = now;
+      next_command_tx_ += command_period_;
+      if (next_command_tx_ <= now || urgent) next_command_tx_ = now + command_period_;
       last_sent_brake_ = brake;
       last_sent_motion_ = moves;
     }

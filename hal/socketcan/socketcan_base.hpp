@@ -108,6 +108,7 @@ class SocketCanBase final : public Base {
   // host -> base
   std::uint8_t command_counter_ = 0, heartbeat_counter_ = 0;
   rt::Nanos last_command_tx_ = -1, last_heartbeat_tx_ = -1, last_probe_tx_ = -1;
+  rt::Nanos next_command_tx_ = 0;  // the command grid's next slot
   bool last_sent_brake_ = false;
   bool last_sent_motion_ = false;
 };

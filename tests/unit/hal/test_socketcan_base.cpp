@@ -495,10 +495,13 @@ TEST_F(SocketCanBaseTest, CommandsGoOutAtTheCommandRateAndHeartbeatsAtTheirRate)
       frames.push_back(f);
     }
   }
-  // 30 Hz: never closer than 1/30 s; 0, 34, 68, ... 986 ms with 1 ms steps.
+  // 30 Hz on a grid of 1/30 s: 0, 34, 67, 100, ... with 1 ms steps (each send at the first
+  // step on or after its slot: gaps of 33 or 34 ms, 30 in the second).
   ASSERT_EQ(command_times.size(), 30u);
   for (std::size_t k = 1; k < command_times.size(); ++k) {
-    EXPECT_GE(command_times[k] - command_times[k - 1], 33'333'333) << k;
+    EXPECT_GE(command_times[k] - command_times[k - 1], 33 * kMs) << k;
+    EXPECT_LE(command_times[k] - command_times[k - 1], 34 * kMs) << k;
+    EXPECT_GE(command_times[k], static_cast<rt::Nanos>(k) * 33'333'333) << k;  // never ahead of its slot
   }
   const std::vector<CanCommand> cmds = commandsIn(profile, frames);
   for (std::size_t k = 0; k < cmds.size(); ++k) {
@@ -515,6 +518,21 @@ TEST_F(SocketCanBaseTest, CommandsGoOutAtTheCommandRateAndHeartbeatsAtTheirRate)
     EXPECT_EQ(beats[k].state, CanHostState::kDriving);
   }
   EXPECT_EQ(base->counters().frames_tx, 40u);
+}
+
+TEST_F(SocketCanBaseTest, ABaseLoopOf10MsStillSendsThirtyCommandsASecond) {
+  // The base I/O thread's period (100 Hz) does not divide the command period: a grid keeps
+  // 30 Hz (a "one period since the last send" rule gives 25 Hz: 40 ms gaps).
+  int commands = 0;
+  for (rt::Nanos t = 0; t < 3000 * kMs; t += 10 * kMs) {
+    if (t % (20 * kMs) == 0) {
+      ASSERT_TRUE(peer->healthy());
+      readAt(t);
+    }
+    base->write(t, drive(0.3, -0.2));
+    for (const can_frame& f : peer->received()) commands += f.can_id == profile.command.id ? 1 : 0;
+  }
+  EXPECT_EQ(commands, 90);
 }
 
 TEST_F(SocketCanBaseTest, BrakeAndStopGoOutAtOnce) {
