@@ -279,9 +279,15 @@ class SimHal::SimBase final : public Base {
 class SimHal::SimObstacles final : public ObstacleSensor {
  public:
   SimObstacles(SimHal& hal, const SimHalConfig& config)
-      : hal_(hal), period_(std::max<rt::Nanos>(1, std::llround(1e9 / config.obstacle_rate_hz))), tolerance_(period_ / 20) {}
+      : hal_(hal),
+        period_(std::max<rt::Nanos>(1, std::llround(1e9 / config.obstacle_rate_hz))),
+        tolerance_(period_ / 20),
+        movers_only_(config.movers_only) {}
 
   bool read(rt::Nanos now, ObstacleFrame& out) override {
+    // No SimBase steps the world: this (perception) thread is its only user, and advances it
+    // with the world's robot standing still.
+    if (movers_only_) hal_.base_->read(now);
     if (hal_.freeze_obstacles_.load()) return false;
     // A fixed schedule (due times a period apart), not "a period since the last frame":
     // polled at 100 Hz, a 30 Hz camera gives 30 frames a second, not 25.
@@ -300,6 +306,7 @@ class SimHal::SimObstacles final : public ObstacleSensor {
   SimHal& hal_;
   rt::Nanos period_;
   rt::Nanos tolerance_;  // a poll this much early still takes its frame (wake-up jitter)
+  bool movers_only_;
   rt::Nanos next_due_ = -1;
   bool has_frame_ = false;
   std::uint64_t sequence_ = 0;
@@ -323,13 +330,20 @@ SimHal::SimHal(const PolygonMap& map, const RobotProfile& robot, const SimHalCon
   }
   base_ = std::make_unique<SimBase>(*this, config, start_time);
   obstacles_ = std::make_unique<SimObstacles>(*this, config);
+  movers_only_ = config.movers_only;
   // A first frame, so perception has the movers before the base thread's first read.
   base_->publishMovers(start_time);
 }
 
 SimHal::~SimHal() = default;
 
-Base& SimHal::base() { return *base_; }
+Base& SimHal::base() {
+  // Two threads would step one world: with movers_only the obstacle sensor owns it.
+  if (movers_only_) {
+    throw std::logic_error("SimHal: base() is not available with movers_only (the obstacle sensor steps the world)");
+  }
+  return *base_;
+}
 ObstacleSensor& SimHal::obstacles() { return *obstacles_; }
 const World& SimHal::world() const { return *world_; }
 

@@ -9,6 +9,11 @@
 //     `obstacle_rate_hz`, each mover seen only within `sensor_range_m` of the robot.
 // Everything is allocated at construction; read()/write() allocate nothing. Fault
 // injection for tests: freezeOdometry / freezeObstacles stop the stamps from advancing.
+//
+// With `movers_only` (staad with a real base and `obstacles: sim`: the simulated camera)
+// nobody drives the world's robot: it stands at `start` (the movers' walks keep away from
+// it, the sensor range is measured from it), base() must not be used, and the obstacle
+// sensor's read(now) advances the world (the movers) to `now` itself.
 
 #include "control/robot_profile.hpp"
 #include "hal/base.hpp"
@@ -37,6 +42,8 @@ struct SimHalConfig {
   // Largest simulation step; a longer gap between read() calls is integrated in steps of
   // at most this (so a late wake-up does not teleport the robot).
   double max_step_s = 0.02;
+  // The movers only: the obstacle sensor advances the world, no SimBase is used (above).
+  bool movers_only = false;
 };
 
 class SimHal {
@@ -49,7 +56,7 @@ class SimHal {
   SimHal(const SimHal&) = delete;
   SimHal& operator=(const SimHal&) = delete;
 
-  Base& base();
+  Base& base();  // throws std::logic_error with movers_only
   ObstacleSensor& obstacles();
 
   // Test hooks (any thread): freeze the odometry stamps / obstacle frames (a stalled input).
@@ -70,6 +77,7 @@ class SimHal {
   std::atomic<bool> freeze_odometry_{false};
   std::atomic<bool> freeze_obstacles_{false};
   std::atomic<int> collisions_{0};
+  bool movers_only_ = false;
 };
 
 }  // namespace staa::hal

@@ -11,7 +11,8 @@
 //   each RT thread --*_log-->  service                              (SPSC rings)
 //
 // heartbeat counts control cycles (the watchdog pings only while it advances); shutdown
-// tells the control thread to brake and hold (the daemon is stopping).
+// tells the control thread to brake and hold (the daemon is stopping). The debug_* atomics
+// carry the test-only fault injections (debug.faults) from the service thread.
 
 #include "app/staad/status.hpp"
 #include "app/staad/telemetry.hpp"
@@ -61,6 +62,10 @@ struct Channels {
   rt::LogRing perception_log;
   std::atomic<std::uint64_t> heartbeat{0};
   std::atomic<bool> shutdown{false};
+  // service -> control: the next cycle busy-waits this long (ms; 0: none), then clears it.
+  std::atomic<std::uint32_t> debug_overrun_ms{0};
+  // service -> perception: obstacle frames are read but not published (a depth stall).
+  std::atomic<bool> debug_stall_obstacles{false};
 };
 
 }  // namespace staa::staad

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -250,12 +251,32 @@ void readBudget(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
   }
 }
 
+void readObstacles(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node n = root["obstacles"];
+  if (!n.IsDefined()) return;
+  config.obstacles = r.string(n, "obstacles", "sim or none");
+  if (config.obstacles != "sim" && config.obstacles != "none") {
+    r.fail(n, "obstacles", "expected sim (the simulator's movers) or none (no obstacle sensor: empty frames), got " + describe(n));
+  }
+}
+
 void readSim(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
   const YAML::Node sim = r.section(root, "sim", "sim", {"start", "movers", "mover_speed", "mover_radius", "seed", "sensor_range_m"});
   // The simulated obstacles arrive at the perception rate, like a depth camera's frames.
   config.sim.obstacle_rate_hz = config.perception_hz;
-  if (config.hal != "sim") return;  // a real base ignores the section (it is still checked for typos)
-  if (!sim.IsDefined()) r.fail(Reader::keyOf(root, "hal"), "sim", "missing (hal: sim needs at least sim.start: [x, y, theta], free in the map)");
+  // A real base without simulated obstacles ignores the section (it is still checked for typos).
+  if (config.hal != "sim" && config.obstacles != "sim") return;
+  // With a real base the simulated world only moves its movers (the simulated camera): its
+  // own robot stands at sim.start, where the movers' walks keep away from.
+  config.sim.movers_only = config.hal != "sim";
+  if (!sim.IsDefined()) {
+    if (config.hal == "sim") {
+      r.fail(Reader::keyOf(root, "hal"), "sim", "missing (hal: sim needs at least sim.start: [x, y, theta], free in the map)");
+    }
+    r.fail(Reader::keyOf(root, "obstacles"), "sim",
+           "missing (obstacles: sim needs at least sim.start: [x, y, theta], free in the map, where the simulated world "
+           "is anchored; or obstacles: none)");
+  }
 
   const YAML::Node start = r.required(sim, "start", "sim.start", "the simulated robot's start pose [x, y, theta], free in the map");
   const auto s = r.triple(start, "sim.start");
@@ -304,6 +325,68 @@ void readSim(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
   }
   if (const YAML::Node n = sim["sensor_range_m"]; n.IsDefined()) {
     config.sim.sensor_range_m = r.above(n, "sim.sensor_range_m", 0.0, "must be > 0 m");
+  }
+}
+
+// A network interface name as the kernel takes it (dev_valid_name): 1..15 bytes, not "." or
+// "..", no '/', ':' or white space.
+bool validInterfaceName(std::string_view name) {
+  if (name.empty() || name.size() > 15 || name == "." || name == "..") return false;
+  return std::none_of(name.begin(), name.end(), [](char c) {
+    return c == '/' || c == ':' || std::isspace(static_cast<unsigned char>(c)) || static_cast<unsigned char>(c) < 0x20;
+  });
+}
+
+void readSocketCan(const Reader& r, const YAML::Node& root, const fs::path& base, DaemonConfig& config) {
+  const YAML::Node can = r.section(root, "socketcan", "socketcan", {"interface", "profile"});
+  if (config.hal != "socketcan") return;  // checked for typos only
+  if (!can.IsDefined()) {
+    r.fail(Reader::keyOf(root, "hal"), "socketcan",
+           "missing (hal: socketcan needs socketcan.interface: can0 or unix:/path, and socketcan.profile: a "
+           "staa-can-profile/1 file such as can/hsr_base.yaml)");
+  }
+  const YAML::Node iface = r.required(can, "interface", "socketcan.interface", "can0, or unix:/path for a SOCK_SEQPACKET socket");
+  const std::string text = r.string(iface, "socketcan.interface", "a CAN interface name such as can0, or unix:/path");
+  constexpr std::string_view kUnix = "unix:";
+  if (text.rfind(kUnix, 0) == 0) {
+    const std::string rest = text.substr(kUnix.size());
+    if (rest.empty()) r.fail(iface, "socketcan.interface", "unix: needs a socket path after it, got " + describe(iface));
+    const fs::path p(rest);
+    const std::string path = (p.is_absolute() ? p : base / p).lexically_normal().string();
+    if (path.size() > kMaxSocketPathBytes) {
+      r.fail(iface, "socketcan.interface", "the socket path is longer than " + std::to_string(kMaxSocketPathBytes) +
+                                               " bytes (the limit of a Unix socket address), got " +
+                                               std::to_string(path.size()) + " bytes: " + path);
+    }
+    config.socketcan.interface = std::string(kUnix) + path;
+  } else {
+    if (!validInterfaceName(text)) {
+      r.fail(iface, "socketcan.interface",
+             "expected a CAN interface name (1..15 characters, no '/', ':' or spaces, e.g. can0) or unix:/path, got " +
+                 describe(iface));
+    }
+    config.socketcan.interface = text;
+  }
+
+  const YAML::Node profile = r.required(can, "profile", "socketcan.profile", "a staa-can-profile/1 file such as can/hsr_base.yaml");
+  config.socketcan.profile_file = r.path(profile, "socketcan.profile", base);
+  r.existingFile(profile, "socketcan.profile", config.socketcan.profile_file);
+  try {
+    config.socketcan.profile = hal::loadCanProfile(config.socketcan.profile_file);
+  } catch (const std::exception& e) {  // CanProfileError, or an I/O error
+    r.fail(profile, "socketcan.profile", e.what());
+  }
+}
+
+void readDebug(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node debug = r.section(root, "debug", "debug", {"faults"});
+  if (!debug.IsDefined()) return;
+  if (const YAML::Node n = debug["faults"]; n.IsDefined()) {
+    bool on = false;
+    if (!n.IsScalar() || !YAML::convert<bool>::decode(n, on)) {
+      r.fail(n, "debug.faults", "expected true or false, got " + describe(n));
+    }
+    config.debug_faults = on;
   }
 }
 
@@ -431,7 +514,8 @@ void readMemory(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
 
 }  // namespace
 
-DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& source) {
+DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& source,
+                               const std::optional<std::string>& hal_override) {
   const Reader r(source.string());
   // Anchored absolutely: the daemon may change its working directory after loading.
   std::error_code ec;
@@ -449,7 +533,8 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
     throw ConfigError(source.string() + ": expected a mapping with format: " + std::string(kFormat) + ", robot, map, ..., got " +
                       describe(root));
   }
-  r.onlyKeys(root, "", {"format", "robot", "map", "hal", "sim", "rates", "budget", "threads", "socket", "limits", "goal", "telemetry", "memory"});
+  r.onlyKeys(root, "", {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "rates", "budget", "threads", "socket",
+                        "limits", "goal", "telemetry", "memory", "debug"});
   const YAML::Node format = root["format"];
   if (!Reader::present(format)) r.fail(root, "format", "missing (expected " + std::string(kFormat) + ")");
   if (!format.IsScalar() || format.Scalar() != kFormat) {
@@ -460,26 +545,32 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   config.file = source;
   if (const YAML::Node hal = root["hal"]; hal.IsDefined()) {
     config.hal = r.string(hal, "hal", "sim or socketcan");
-    if (config.hal == "socketcan") {
-      r.fail(hal, "hal", "socketcan is not built yet (this staad has the simulated base only; use hal: sim), got socketcan");
+    if (config.hal != "sim" && config.hal != "socketcan") r.fail(hal, "hal", "expected sim or socketcan, got " + describe(hal));
+  }
+  if (hal_override) {
+    if (*hal_override != "sim" && *hal_override != "socketcan") {
+      throw ConfigError("--hal: expected sim or socketcan, got '" + *hal_override + "'");
     }
-    if (config.hal != "sim") r.fail(hal, "hal", "expected sim or socketcan, got " + describe(hal));
+    config.hal = *hal_override;
   }
   readRobotAndMap(r, root, base, config);
   readRates(r, root, config);
   readBudget(r, root, config);
+  readObstacles(r, root, config);
   readSim(r, root, config);
+  readSocketCan(r, root, base, config);
   readThreads(r, root, config);
   readSocket(r, root, base, config);
   readLimits(r, root, config);
   readGoal(r, root, config);
   readTelemetry(r, root, base, config);
   readMemory(r, root, config);
+  readDebug(r, root, config);
   config.control.rate_hz = config.control_hz;
   return config;
 }
 
-DaemonConfig loadDaemonConfig(const fs::path& file) {
+DaemonConfig loadDaemonConfig(const fs::path& file, const std::optional<std::string>& hal) {
   std::error_code ec;
   const auto status = fs::status(file, ec);
   if (!fs::exists(status)) throw ConfigError(file.string() + ": config file not found");
@@ -489,7 +580,7 @@ DaemonConfig loadDaemonConfig(const fs::path& file) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw ConfigError(file.string() + ": read error");
-  return parseDaemonConfig(text.str(), file);
+  return parseDaemonConfig(text.str(), file, hal);
 }
 
 }  // namespace staa::staad

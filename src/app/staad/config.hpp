@@ -8,8 +8,10 @@
 //   format: staad-config/1
 //   robot: ../robots/paper-agent.yaml        # staa-robot/1
 //   map: ../maps/office.yaml                 # staa-polygon-map/1
-//   hal: sim                                 # sim | socketcan (socketcan: not built yet)
+//   hal: sim                                 # sim | socketcan
 //   sim: {start: [1.5, 4.5, 0.0], movers: 3, mover_speed: 0.8, seed: 1}
+//   socketcan: {interface: can0, profile: can/hsr_base.yaml}  # hal: socketcan ("unix:/path" in tests)
+//   obstacles: sim                           # sim (the simulator's movers) | none
 //   rates: {control_hz: 30, base_hz: 100, perception_hz: 30}
 //   budget: {ms: 19}                         # or {expansions: 1000}
 //   threads:                                 # priority 0: normal scheduling; cpu -1: any
@@ -21,10 +23,12 @@
 //   goal: {tolerance_m: 0.2, heading_tolerance: 0.4}
 //   telemetry: {path: "", records: 4096, svg: ""}  # empty path: off; svg: the run's picture
 //   memory: {heap_prefault_mb: 64, stack_prefault_kb: 256}
+//   debug: {faults: false}                   # true: the socket's fault-injection requests (tests)
 
 #include "control/control_cycle.hpp"
 #include "control/robot_profile.hpp"
 #include "hal/sim/sim_hal.hpp"
+#include "hal/socketcan/can_profile.hpp"
 #include "map/polygon_map.hpp"
 #include "rt/realtime.hpp"
 
@@ -41,6 +45,16 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// hal: socketcan: the base over SocketCAN (hal/socketcan).
+struct SocketCanConfig {
+  // "can0" (a network interface, PF_CAN raw socket) or "unix:/abs/path" (a SOCK_SEQPACKET
+  // socket carrying struct can_frame records: the simulated base of the tests). A relative
+  // unix: path is made absolute against the config's directory.
+  std::string interface;
+  std::filesystem::path profile_file;  // staa-can-profile/1
+  hal::CanProfile profile;
+};
+
 struct DaemonConfig {
   std::filesystem::path file;        // where it was loaded from
   std::filesystem::path robot_file;
@@ -48,7 +62,9 @@ struct DaemonConfig {
   std::filesystem::path map_file;
   PolygonMap map;
   std::string hal = "sim";           // sim | socketcan
-  hal::SimHalConfig sim;
+  hal::SimHalConfig sim;              // hal: sim, or obstacles: sim (the simulated camera)
+  SocketCanConfig socketcan;          // hal: socketcan
+  std::string obstacles = "sim";      // sim (the sim world's movers) | none (empty frames)
   double control_hz = 30.0;
   double base_hz = 100.0;
   double perception_hz = 30.0;
@@ -67,10 +83,13 @@ struct DaemonConfig {
   std::size_t heap_prefault_bytes = 64u << 20;
   std::size_t stack_prefault_bytes = 256u << 10;
   ControlConfig control;  // rate_hz = control_hz; goal tolerances from `goal`
+  bool debug_faults = false;  // the control socket takes {"debug": ...} fault injections
 };
 
-// Parses the YAML text; `source` names it in errors and anchors relative paths.
-DaemonConfig parseDaemonConfig(const std::string& yaml_text, const std::filesystem::path& source);
-DaemonConfig loadDaemonConfig(const std::filesystem::path& file);
+// Parses the YAML text; `source` names it in errors and anchors relative paths. `hal`, when
+// given (staad --hal), replaces the file's hal before the sections that depend on it are read.
+DaemonConfig parseDaemonConfig(const std::string& yaml_text, const std::filesystem::path& source,
+                               const std::optional<std::string>& hal = std::nullopt);
+DaemonConfig loadDaemonConfig(const std::filesystem::path& file, const std::optional<std::string>& hal = std::nullopt);
 
 }  // namespace staa::staad

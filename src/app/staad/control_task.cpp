@@ -69,6 +69,7 @@ hal::VelocityCommand brakeCommand(rt::Nanos stamp) {
 
 ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, ClockFn planner_clock)
     : ch_(channels),
+      clock_(planner_clock),
       period_(secondsToNanos(1.0 / config.control_hz)),
       odometry_timeout_(secondsToNanos(config.odometry_timeout_s)),
       obstacles_timeout_(secondsToNanos(config.obstacles_timeout_s)),
@@ -114,8 +115,20 @@ void ControlTask::takeRequests(rt::Nanos now) {
         // Only the base thread may call Base::setPose.
         if (!ch_.poses.push(request.pose)) log(now, rt::LogLevel::kWarning, "pose request dropped: the base thread's ring is full");
         break;
-      case RequestKind::kStatus: break;  // answered by the service thread itself
+      case RequestKind::kStatus:  // answered by the service thread itself
+      case RequestKind::kDebug: break;  // carried out through Channels' debug atomics
     }
+  }
+}
+
+// 1b. A test's forced overrun (debug.faults): this cycle publishes its command that much
+// later, so the base thread falls back to the plan's next action, then brakes.
+void ControlTask::forcedOverrun(rt::Nanos now) {
+  const std::uint32_t ms = ch_.debug_overrun_ms.exchange(0, std::memory_order_acq_rel);
+  if (ms == 0) return;
+  log(now, rt::LogLevel::kWarning, "debug: forced overrun, busy-waiting (ms)", static_cast<double>(ms), 0.0, 0.0, 1);
+  const std::int64_t until = clock_() + static_cast<std::int64_t>(ms) * 1'000'000;
+  while (clock_() < until) {
   }
 }
 
@@ -138,10 +151,12 @@ void ControlTask::takeInputs() {
 
 // 3. Stale or faulty inputs hold the robot.
 FaultKind ControlTask::judgeInputs(rt::Nanos now) const {
+  // The base's own fault first: a bus-off or a lost heartbeat silences the odometry too, and
+  // the status should name the cause, not the symptom.
+  if (base_.status.fault != hal::BaseFault::kNone) return FaultKind::kBase;
   const rt::Nanos odometry_stamp = base_.odometry.stamp;
   if (odometry_stamp < 0 || now - odometry_stamp > odometry_timeout_) return FaultKind::kStaleOdometry;
   if (obstacles_stamp_ < 0 || now - obstacles_stamp_ > obstacles_timeout_) return FaultKind::kStaleObstacles;
-  if (base_.status.fault != hal::BaseFault::kNone) return FaultKind::kBase;
   return FaultKind::kNone;
 }
 
@@ -180,6 +195,7 @@ void ControlTask::setState(rt::Nanos now, DaemonState state, FaultKind fault) {
 void ControlTask::cycle(rt::Nanos now) {
   flushTelemetry();  // the previous cycle's record, now that its overrun is known
   takeRequests(now);
+  forcedOverrun(now);
   takeInputs();
   const FaultKind fault = judgeInputs(now);
 
@@ -276,6 +292,10 @@ void ControlTask::publishStatus(rt::Nanos now) {
   s.fault = fault_;
   s.base_fault = base_.status.fault;
   s.base_fault_code = base_.status.fault_code;
+  s.base_enabled = base_.status.enabled;
+  s.base_bad_frames = base_.status.bad_frames;
+  s.base_rx_overflows = base_.status.rx_overflows;
+  s.base_error_frames = base_.status.error_frames;
   s.cycles = cycles_;
   if (loop_ != nullptr) {
     const rt::PeriodicCounters& c = loop_->counters();

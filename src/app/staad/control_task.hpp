@@ -5,8 +5,10 @@
 //
 // cycle(now), top to bottom:
 //   1. requests from the service thread: goal, stop, pose (forwarded to the base thread);
+//      a forced overrun (debug.faults, tests) busy-waits here;
 //   2. the latest odometry + base status, and the latest obstacle frame;
-//   3. the inputs judged: stale odometry, stale obstacles, a base fault -> brake and report;
+//   3. the inputs judged: a base fault, stale odometry, stale obstacles -> brake and report
+//      (a base fault first: it explains the silence that follows it, e.g. bus-off);
 //      each clears by itself when the input is fresh again;
 //   4. ControlCycle::step with the planner budget (wall clock or expansions);
 //   5. the command (and the plan's next action, the base thread's fallback) published;
@@ -58,6 +60,7 @@ class ControlTask {
 
  private:
   void takeRequests(rt::Nanos now);
+  void forcedOverrun(rt::Nanos now);
   void takeInputs();
   FaultKind judgeInputs(rt::Nanos now) const;
   void setState(rt::Nanos now, DaemonState state, FaultKind fault);
@@ -67,6 +70,7 @@ class ControlTask {
            std::uint8_t count = 0);
 
   Channels& ch_;
+  ClockFn clock_;  // the planner's clock; also times a forced overrun
   rt::Nanos period_;
   rt::Nanos odometry_timeout_;
   rt::Nanos obstacles_timeout_;

@@ -5,6 +5,8 @@
 #include "app/staad/io_tasks.hpp"
 #include "app/staad/service.hpp"
 #include "hal/sim/sim_hal.hpp"
+#include "hal/socketcan/can_transport.hpp"
+#include "hal/socketcan/socketcan_base.hpp"
 #include "rt/alloc_count.hpp"
 #include "rt/periodic.hpp"
 #include "rt/realtime.hpp"
@@ -71,7 +73,9 @@ class Daemon {
   rt::Clock& clock_;
   std::ostream& log_;
   std::optional<rt::Notifier> notifier_;
-  std::unique_ptr<hal::SimHal> sim_;
+  std::unique_ptr<hal::SimHal> sim_;                // hal: sim, or obstacles: sim
+  std::unique_ptr<hal::SocketCanBase> can_base_;    // hal: socketcan
+  std::unique_ptr<NoObstacles> no_obstacles_;       // obstacles: none
   std::unique_ptr<Channels> channels_;
   std::unique_ptr<ControlTask> task_;
   std::unique_ptr<BaseTask> base_task_;
@@ -94,17 +98,45 @@ void Daemon::createWorkspaces() {
   }
 
   const rt::Nanos now = clock_.now();
-  try {
-    sim_ = std::make_unique<hal::SimHal>(config_.map, config_.robot, config_.sim, now);
-  } catch (const std::invalid_argument& e) {
-    std::string message = config_.file.string();
-    message.append(": sim: ").append(e.what());
-    throw ConfigError(message);
+  // The simulated world: the base with hal: sim; the movers (the simulated camera) with
+  // obstacles: sim (config.sim.movers_only with a real base).
+  if (config_.hal == "sim" || config_.obstacles == "sim") {
+    try {
+      sim_ = std::make_unique<hal::SimHal>(config_.map, config_.robot, config_.sim, now);
+    } catch (const std::invalid_argument& e) {
+      std::string message = config_.file.string();
+      message.append(": sim: ").append(e.what());
+      throw ConfigError(message);
+    }
+  }
+  hal::Base* base = nullptr;
+  if (config_.hal == "socketcan") {
+    // The bus is opened before anything else runs: a missing interface or socket is named
+    // at once (exit 3), not discovered as a stale robot later.
+    try {
+      can_base_ = std::make_unique<hal::SocketCanBase>(
+          hal::openCanTransport(config_.socketcan.interface, config_.socketcan.profile), config_.socketcan.profile);
+    } catch (const hal::CanTransportError& e) {
+      // e.what() names the interface or the socket path, and why.
+      std::string message = config_.file.string();
+      message.append(": socketcan.interface: cannot open the base's bus: ").append(e.what());
+      throw DeviceError(message);
+    }
+    base = can_base_.get();
+  } else {
+    base = &sim_->base();
+  }
+  hal::ObstacleSensor* obstacles = nullptr;
+  if (config_.obstacles == "sim") {
+    obstacles = &sim_->obstacles();
+  } else {
+    no_obstacles_ = std::make_unique<NoObstacles>();
+    obstacles = no_obstacles_.get();
   }
   channels_ = std::make_unique<Channels>(config_.telemetry_records);
   task_ = std::make_unique<ControlTask>(config_, *channels_);
-  base_task_ = std::make_unique<BaseTask>(sim_->base(), *channels_, periodOf(config_.control_hz));
-  perception_task_ = std::make_unique<PerceptionTask>(sim_->obstacles(), *channels_);
+  base_task_ = std::make_unique<BaseTask>(*base, *channels_, periodOf(config_.control_hz));
+  perception_task_ = std::make_unique<PerceptionTask>(*obstacles, *channels_);
 
   ServiceOptions so;
   so.socket_path = config_.socket_path;
@@ -112,6 +144,7 @@ void Daemon::createWorkspaces() {
   so.telemetry_path = config_.telemetry_path;
   so.svg_path = config_.svg_path;
   so.watchdog_interval = watchdog;
+  so.debug_faults = config_.debug_faults;
   service_ = std::make_unique<Service>(*channels_, *notifier_, so, log_);
   service_->open();
 }
@@ -219,7 +252,11 @@ int Daemon::run() {
   } catch (const ConfigError& e) {
     say(e.what());
     return kExitBadConfig;
+  } catch (const DeviceError& e) {
+    say(e.what());
+    return kExitDevice;
   }
+  if (config_.debug_faults) say("warning: debug.faults is on: the control socket takes fault-injection requests (tests only)");
 
   const rt::MemoryReport memory = rt::lockMemory(config_.heap_prefault_bytes, config_.stack_prefault_bytes);
   for (const std::string& w : memory.warnings) say("warning: " + w);
@@ -229,9 +266,12 @@ int Daemon::run() {
   service_->setControlTiming(&control_.loop->execution(), &control_.loop->wakeLatency(), control_.thread.realtime());
   service_->ready(clock_.now());
   {
-    char line[256];
+    std::string hal = config_.hal;
+    if (config_.hal == "socketcan") hal.append(" on ").append(config_.socketcan.interface);
+    hal.append(", obstacles ").append(config_.obstacles);
+    char line[512];
     std::snprintf(line, sizeof line, "ready: hal %s, control %.0f Hz (%s), base %.0f Hz, perception %.0f Hz, socket %s",
-                  config_.hal.c_str(), config_.control_hz,
+                  hal.c_str(), config_.control_hz,
                   control_.thread.realtime() ? "SCHED_FIFO" : "normal scheduling", config_.base_hz,
                   config_.perception_hz, config_.socket_path.c_str());
     say(line);
@@ -267,19 +307,11 @@ DaemonConfig loadConfig(const DaemonOptions& options) {
     message.append(file.string()).append("': ").append(std::filesystem::exists(file, ec) ? "not a regular file" : "not found");
     throw ConfigError(message);
   }
-  DaemonConfig config = loadDaemonConfig(file);
-  if (options.hal) config.hal = *options.hal;
+  // --hal is applied while parsing: the sections it needs (sim, socketcan) are checked then.
+  DaemonConfig config = loadDaemonConfig(file, options.hal);
   if (options.socket_path) config.socket_path = *options.socket_path;
   if (options.telemetry_path) config.telemetry_path = *options.telemetry_path;
   if (options.svg_path) config.svg_path = *options.svg_path;
-  if (config.hal == "socketcan") {
-    throw ConfigError("hal socketcan: not built yet (use --hal sim)");
-  }
-  if (config.hal != "sim") {
-    std::string message = "hal: must be sim or socketcan, got '";
-    message.append(config.hal).append("'");
-    throw ConfigError(message);
-  }
   return config;
 }
 

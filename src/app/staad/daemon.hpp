@@ -4,7 +4,9 @@
 // section 3:
 //
 //   1. config loaded and validated (a bad value: exit 2, the key and the value named);
-//   2. every workspace created: HAL, channels, control task, control socket, telemetry file;
+//   2. every workspace created: HAL (the base: sim or socketcan, whose bus is opened here,
+//      exit 3 when it cannot be; the obstacles: sim or none), channels, control task,
+//      control socket, telemetry file;
 //   3. rt::lockMemory (mlockall, malloc tuned, heap and stack prefaulted);
 //   4. the real-time threads started with their ThreadSpecs: base and perception first
 //      (the control thread's first cycle then sees fresh inputs), then control;
@@ -20,6 +22,7 @@
 #include <filesystem>
 #include <iosfwd>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 namespace staa::staad {
@@ -28,6 +31,14 @@ enum ExitCode : int {
   kExitOk = 0,         // stopped by SIGTERM/SIGINT
   kExitFailure = 1,    // run-time failure: socket busy, a thread could not start, ...
   kExitBadConfig = 2,  // bad config, bad arguments, bad environment
+  kExitDevice = 3,     // the hardware cannot be opened at start-up (no such CAN interface, no
+                       // socket at the unix: path): the message names it
+};
+
+// The base's bus or device cannot be opened at start-up: staad exits 3.
+class DeviceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 struct DaemonOptions {

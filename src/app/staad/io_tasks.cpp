@@ -88,6 +88,15 @@ PerceptionTask::PerceptionTask(hal::ObstacleSensor& sensor, Channels& channels) 
 bool PerceptionTask::cycle(rt::Nanos now) {
   hal::ObstacleFrame& frame = ch_.obstacles.writeBuffer();
   if (!sensor_.read(now, frame)) return false;
+  // A test's depth stall: the sensor runs on (the simulated world keeps moving), nothing
+  // reaches the control thread.
+  const bool stall = ch_.debug_stall_obstacles.load(std::memory_order_acquire);
+  if (stall != stalled_) {
+    rt::pushLog(ch_.perception_log, now, rt::LogLevel::kWarning,
+                stall ? "debug: obstacle frames stalled" : "debug: obstacle frames resumed");
+    stalled_ = stall;
+  }
+  if (stall) return false;
   if (frame.dropped > dropped_seen_) {
     rt::LogRecord r;
     r.time = now;
@@ -100,6 +109,14 @@ bool PerceptionTask::cycle(rt::Nanos now) {
   dropped_seen_ = frame.dropped;
   ch_.obstacles.publish();
   ++frames_;
+  return true;
+}
+
+bool NoObstacles::read(rt::Nanos now, hal::ObstacleFrame& out) {
+  out.stamp = now;
+  out.sequence = ++sequence_;
+  out.count = 0;
+  out.dropped = 0;
   return true;
 }
 

@@ -9,7 +9,11 @@
 // wake-up and published when the cycle ends (up to a period later): while the control thread
 // keeps its deadlines, every command is replaced before it is 2 periods old.
 //
-// PerceptionTask (perception_hz): a new obstacle frame from the sensor is published.
+// PerceptionTask (perception_hz): a new obstacle frame from the sensor is published (not
+// while a test stalls it: Channels::debug_stall_obstacles, the frame is read and dropped).
+//
+// NoObstacles: the sensor of `obstacles: none`, an empty frame every period (no moving
+// obstacles are seen: the robot avoids the map's obstacles only).
 //
 // No allocation, no lock, no I/O beyond the HAL's own non-blocking calls.
 
@@ -70,6 +74,15 @@ class PerceptionTask {
   Channels& ch_;
   std::uint64_t frames_ = 0;
   std::uint64_t dropped_seen_ = 0;
+  bool stalled_ = false;
+};
+
+class NoObstacles final : public hal::ObstacleSensor {
+ public:
+  bool read(rt::Nanos now, hal::ObstacleFrame& out) override;
+
+ private:
+  std::uint64_t sequence_ = 0;
 };
 
 }  // namespace staa::staad

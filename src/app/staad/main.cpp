@@ -3,7 +3,8 @@
 //   staad [--config FILE] [--hal sim|socketcan] [--socket PATH] [--telemetry FILE] [--svg FILE]
 //
 // Exit status: 0 stopped by SIGTERM/SIGINT, 1 run-time failure (socket busy, a thread could
-// not start), 2 bad config, arguments or environment (the message names the key and value).
+// not start), 2 bad config, arguments or environment (the message names the key and value),
+// 3 the hardware cannot be opened (no such CAN interface, no socket at the unix: path).
 #include "app/staad/daemon.hpp"
 #include "rt/clock.hpp"
 

@@ -138,6 +138,46 @@ std::string joined(std::initializer_list<const char*> keys) {
   return out;
 }
 
+// {"debug": "overrun", "ms": 80} or {"debug": "stall_obstacles", "on": true}.
+std::variant<Request, std::string> parseDebug(const Json& j) {
+  const Json& kind = j.at("debug");
+  constexpr const char* kKinds = "overrun or stall_obstacles";
+  if (!kind.is_string()) return std::string("\"debug\": expected a string (") + kKinds + "), got " + describe(kind);
+  const std::string name = kind.get<std::string>();
+  Request request;
+  request.kind = RequestKind::kDebug;
+  const char* param = nullptr;
+  if (name == toString(DebugKind::kOverrun)) {
+    request.debug = DebugKind::kOverrun;
+    param = "ms";
+  } else if (name == toString(DebugKind::kStallObstacles)) {
+    request.debug = DebugKind::kStallObstacles;
+    param = "on";
+  } else {
+    return "\"debug\": unknown fault injection " + describe(kind) + " (expected " + kKinds + ")";
+  }
+  for (const auto& item : j.items()) {
+    if (item.key() != "debug" && item.key() != param) {
+      return "unknown key " + describe(Json(item.key())) + " for debug " + name + " (expected debug, " + param + ")";
+    }
+  }
+  const auto it = j.find(param);
+  if (request.debug == DebugKind::kOverrun) {
+    const std::string range = "an integer number of milliseconds in 1.." + std::to_string(kMaxDebugOverrunMs);
+    if (it == j.end()) return "\"ms\": missing (debug overrun needs " + range + ")";
+    const bool integral = it->is_number() && std::isfinite(it->get<double>()) && std::floor(it->get<double>()) == it->get<double>();
+    if (!integral || it->get<double>() < 1.0 || it->get<double>() > kMaxDebugOverrunMs) {
+      return "\"ms\": expected " + range + ", got " + describe(*it);
+    }
+    request.debug_ms = static_cast<std::uint32_t>(it->get<double>());
+  } else {
+    if (it == j.end()) return std::string("\"on\": missing (debug stall_obstacles needs on: true or false)");
+    if (!it->is_boolean()) return "\"on\": expected true or false, got " + describe(*it);
+    request.debug_on = it->get<bool>();
+  }
+  return request;
+}
+
 }  // namespace
 
 std::variant<Request, std::string> parseRequest(std::string_view line) {
@@ -168,6 +208,10 @@ std::variant<Request, std::string> parseRequest(std::string_view line) {
     return "not valid JSON: " + printable(what);
   }
   if (!j.is_object()) return std::string("expected a JSON object such as {\"cmd\": \"status\"}, got ") + kindName(j);
+  if (j.contains("debug")) {
+    if (j.contains("cmd")) return std::string("a request has \"cmd\" or \"debug\", not both");
+    return parseDebug(j);
+  }
 
   const auto cmd_it = j.find("cmd");
   if (cmd_it == j.end()) return std::string("\"cmd\": missing (expected ") + kCommands + ")";
@@ -203,6 +247,12 @@ std::variant<Request, std::string> parseRequest(std::string_view line) {
 
 std::string requestLine(const Request& request) {
   OrderedJson j;
+  if (request.kind == RequestKind::kDebug) {
+    j["debug"] = toString(request.debug);
+    if (request.debug == DebugKind::kOverrun) j["ms"] = request.debug_ms;
+    if (request.debug == DebugKind::kStallObstacles) j["on"] = request.debug_on;
+    return dumpSafe(j) + "\n";
+  }
   j["cmd"] = toString(request.kind);
   if (request.kind == RequestKind::kGoal || request.kind == RequestKind::kPose) {
     // nlohmann writes the shortest text that reads back to the same double: exact round trip.
@@ -242,6 +292,14 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
                 {"overruns", status.overruns},
                 {"count", status.cycles}};
   j["rt_allocations"] = rt_allocations;
+  // The base driver's view: its fault (as in "fault", also while another fault is reported)
+  // and the frames it refused on the bus.
+  j["base"] = {{"fault", status.base_fault == hal::BaseFault::kNone ? Json(nullptr) : Json(hal::toString(status.base_fault))},
+               {"fault_code", status.base_fault_code},
+               {"enabled", status.base_enabled},
+               {"bad_frames", status.base_bad_frames},
+               {"rx_overflows", status.base_rx_overflows},
+               {"error_frames", status.base_error_frames}};
 
   // Beyond the contract: what an engineer looks at when the contract's numbers look wrong.
   j["command"] = {status.v_cmd, status.w_cmd};

@@ -6,6 +6,10 @@
 //   {"cmd": "pose", "x": 1.0, "y": 1.0, "theta": 0.0}   -> {"ok": true}   (set / correct the pose)
 //   {"cmd": "stop"}                                     -> {"ok": true}   (brake, drop the goal)
 //   {"cmd": "status"}                                   -> {"ok": true, "status": {...}}
+//   {"debug": "overrun", "ms": 80}                      -> {"ok": true}   (tests: the next control
+//   {"debug": "stall_obstacles", "on": true}            -> {"ok": true}    cycle busy-waits / obstacle
+//                                                                          frames stop; only with
+//                                                                          debug.faults: true)
 //   anything else                                       -> {"ok": false, "error": "..."}
 //
 // Each accepted goal gets an id (1, 2, ... in the order the daemon queued them); the status

@@ -362,6 +362,10 @@ void Service::handleLine(Client& c, std::string_view line) {
     c.out.append(statusReply(status(), rt::realtimeAllocations()));
     return;
   }
+  if (request.kind == RequestKind::kDebug) {
+    handleDebug(c, request);
+    return;
+  }
   if (ch_.shutdown.load(std::memory_order_relaxed)) {
     c.out.append(errorReply("staad is stopping"));
     return;
@@ -380,6 +384,26 @@ void Service::handleLine(Client& c, std::string_view line) {
   last_goal_id_ = queued.goal_id;
   if (!options_.svg_path.empty()) run_.addGoal(queued.goal_id, queued.pose);
   c.out.append(goalReply(queued.goal_id));
+}
+
+void Service::handleDebug(Client& c, const Request& request) {
+  if (!options_.debug_faults) {
+    c.out.append(errorReply("debug requests are off: they inject faults for tests, and are taken only with debug: "
+                            "{faults: true} in the config"));
+    return;
+  }
+  switch (request.debug) {
+    case DebugKind::kOverrun:
+      ch_.debug_overrun_ms.store(request.debug_ms, std::memory_order_release);
+      info("debug: the next control cycle busy-waits " + std::to_string(request.debug_ms) + " ms (a forced overrun)");
+      break;
+    case DebugKind::kStallObstacles:
+      ch_.debug_stall_obstacles.store(request.debug_on, std::memory_order_release);
+      info(request.debug_on ? "debug: obstacle frames stalled" : "debug: obstacle frames resumed");
+      break;
+    case DebugKind::kNone: break;
+  }
+  c.out.append(okReply());
 }
 
 void Service::flushClient(Client& c) {

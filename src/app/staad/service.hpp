@@ -8,7 +8,8 @@
 // client has its own line buffer of at most kMaxRequestBytes; a longer line gets an error
 // reply and is discarded up to its newline, the client stays connected. Goal, stop and pose
 // requests go to the control thread through the request ring; status is answered here from
-// the latest Status snapshot. Goals are numbered here (1, 2, ...) as they are queued.
+// the latest Status snapshot. Goals are numbered here (1, 2, ...) as they are queued. Debug
+// requests (tests' fault injection, only with debug.faults) set Channels' debug atomics.
 //
 // With an SVG path (`--svg`, telemetry.svg) the service keeps the run as it goes (the poses of
 // the telemetry records, decimated; the goals it queued) and draws it when staad stops.
@@ -50,6 +51,7 @@ struct ServiceOptions {
   std::filesystem::path telemetry_path;  // empty: off
   std::filesystem::path svg_path;        // the run's picture at shutdown; empty: off
   std::optional<rt::Nanos> watchdog_interval;  // rt::Notifier::watchdogInterval()
+  bool debug_faults = false;  // {"debug": ...} requests taken (config debug.faults), else refused
 };
 
 class Service {
@@ -113,6 +115,7 @@ class Service {
   void acceptClients();
   void readClient(Client& client);
   void handleLine(Client& client, std::string_view line);
+  void handleDebug(Client& client, const Request& request);
   void flushClient(Client& client);
   void closeClient(Client& client);
   bool readSignal();

@@ -33,6 +33,16 @@ const char* toString(RequestKind kind) {
     case RequestKind::kStop: return "stop";
     case RequestKind::kPose: return "pose";
     case RequestKind::kStatus: return "status";
+    case RequestKind::kDebug: return "debug";
+  }
+  return "unknown";
+}
+
+const char* toString(DebugKind kind) {
+  switch (kind) {
+    case DebugKind::kNone: return "none";
+    case DebugKind::kOverrun: return "overrun";
+    case DebugKind::kStallObstacles: return "stall_obstacles";
   }
   return "unknown";
 }

@@ -36,6 +36,11 @@ struct Status {
   FaultKind fault = FaultKind::kNone;
   hal::BaseFault base_fault = hal::BaseFault::kNone;
   std::uint32_t base_fault_code = 0;
+  // The base driver's own view (hal::BaseStatus): enabled, and what it refused on the bus.
+  bool base_enabled = false;
+  std::uint64_t base_bad_frames = 0;    // dropped frames: bad DLC, checksum, counter, range
+  std::uint64_t base_rx_overflows = 0;  // frames lost in the receive queue
+  std::uint64_t base_error_frames = 0;  // CAN error frames (bus-off, restarted, ...)
   // Control thread timing (execution of a cycle, and its wake-up latency), microseconds.
   std::uint64_t cycles = 0;
   double cycle_p50_us = 0.0, cycle_p99_us = 0.0, cycle_max_us = 0.0;
@@ -56,16 +61,31 @@ struct Status {
   std::uint64_t queued_goal_id = 0;
 };
 
-enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus };
-const char* toString(RequestKind kind);  // "goal", "stop", "pose", "status"
+enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus, kDebug };
+const char* toString(RequestKind kind);  // "goal", "stop", "pose", "status", "debug"
 
-// A request from the control socket, passed to the control thread through an SpscRing.
+// Fault injection for tests ({"debug": ...}; only with debug.faults: true in the config).
+enum class DebugKind : std::uint8_t {
+  kNone,
+  kOverrun,         // the next control cycle busy-waits debug_ms (a forced overrun)
+  kStallObstacles,  // obstacle frames stop (debug_on) or resume: a depth stall
+};
+const char* toString(DebugKind kind);  // "none", "overrun", "stall_obstacles"
+
+// At most this long a forced overrun (ms): long enough for the base thread to brake.
+constexpr std::uint32_t kMaxDebugOverrunMs = 5000;
+
+// A request from the control socket, passed to the control thread through an SpscRing
+// (debug requests are carried out by the service thread through atomics of Channels).
 struct Request {
   RequestKind kind = RequestKind::kStatus;
   Pose2 pose;  // goal or pose
   // A goal's id, given by the service thread as it queues the goal (1, 2, ...); never on the
   // wire from a client.
   std::uint64_t goal_id = 0;
+  DebugKind debug = DebugKind::kNone;
+  std::uint32_t debug_ms = 0;  // kOverrun
+  bool debug_on = false;       // kStallObstacles
 };
 
 }  // namespace staa::staad

@@ -273,6 +273,64 @@ TEST(Protocol, StatusReplyCarriesTheStatusObject) {
   EXPECT_EQ(j["status"], statusJson(filledStatus(), 3));
 }
 
+TEST(Protocol, DebugRequestsParseAndRoundTrip) {
+  const Request overrun = parsedOk(R"({"debug": "overrun", "ms": 80})");
+  EXPECT_EQ(overrun.kind, RequestKind::kDebug);
+  EXPECT_EQ(overrun.debug, DebugKind::kOverrun);
+  EXPECT_EQ(overrun.debug_ms, 80u);
+  const Request stall = parsedOk(R"({"debug": "stall_obstacles", "on": true})");
+  EXPECT_EQ(stall.debug, DebugKind::kStallObstacles);
+  EXPECT_TRUE(stall.debug_on);
+  EXPECT_FALSE(parsedOk(R"({"debug": "stall_obstacles", "on": false})").debug_on);
+  for (const Request& r : {overrun, stall}) {
+    const Request back = parsedOk(requestLine(r));
+    EXPECT_EQ(back.kind, RequestKind::kDebug);
+    EXPECT_EQ(back.debug, r.debug);
+    EXPECT_EQ(back.debug_ms, r.debug_ms);
+    EXPECT_EQ(back.debug_on, r.debug_on);
+  }
+  EXPECT_EQ(requestLine(overrun), "{\"debug\":\"overrun\",\"ms\":80}\n");
+}
+
+TEST(Protocol, MalformedDebugRequestsAreRejectedWithTheFieldAndValue) {
+  const std::vector<Malformed> cases = {
+      {R"({"debug": "explode"})", {"\"debug\"", "unknown fault injection \"explode\"", "overrun or stall_obstacles"}},
+      {R"({"debug": 3})", {"\"debug\"", "expected a string", "got 3"}},
+      {R"({"debug": "overrun"})", {"\"ms\": missing", "1..5000"}},
+      {R"({"debug": "overrun", "ms": 0})", {"\"ms\"", "1..5000", "got 0"}},
+      {R"({"debug": "overrun", "ms": 5001})", {"\"ms\"", "got 5001"}},
+      {R"({"debug": "overrun", "ms": 2.5})", {"\"ms\"", "integer", "got 2.5"}},
+      {R"({"debug": "overrun", "ms": "80"})", {"\"ms\"", "got \"80\""}},
+      {R"({"debug": "overrun", "ms": 80, "on": true})", {"unknown key \"on\"", "debug, ms"}},
+      {R"({"debug": "stall_obstacles"})", {"\"on\": missing"}},
+      {R"({"debug": "stall_obstacles", "on": 1})", {"\"on\"", "true or false", "got 1"}},
+      {R"({"cmd": "status", "debug": "overrun", "ms": 5})", {"\"cmd\" or \"debug\", not both"}},
+  };
+  for (const Malformed& c : cases) {
+    const std::string error = parsedError(c.line);
+    SCOPED_TRACE(c.line + "  ->  " + error);
+    for (const std::string& e : c.expected) EXPECT_THAT(error, HasSubstr(e));
+  }
+}
+
+TEST(Protocol, StatusJsonCarriesTheBaseDriversCounters) {
+  Status s = filledStatus();
+  s.base_fault = hal::BaseFault::kBusOff;
+  s.base_fault_code = 0;
+  s.base_enabled = true;
+  s.base_bad_frames = 12;
+  s.base_rx_overflows = 3;
+  s.base_error_frames = 2;
+  const Json base = statusJson(s, 0)["base"];
+  EXPECT_EQ(base["fault"], "bus off");
+  EXPECT_EQ(base["enabled"], true);
+  EXPECT_EQ(base["bad_frames"], 12);
+  EXPECT_EQ(base["rx_overflows"], 3);
+  EXPECT_EQ(base["error_frames"], 2);
+  s.base_fault = hal::BaseFault::kNone;
+  EXPECT_TRUE(statusJson(s, 0)["base"]["fault"].is_null());
+}
+
 TEST(Protocol, NamesOfEnumsAreTheContractSpellings) {
   EXPECT_STREQ(toString(FaultKind::kNone), "none");
   EXPECT_STREQ(toString(FaultKind::kStaleOdometry), "stale_odometry");
@@ -282,6 +340,9 @@ TEST(Protocol, NamesOfEnumsAreTheContractSpellings) {
   EXPECT_STREQ(toString(RequestKind::kStop), "stop");
   EXPECT_STREQ(toString(RequestKind::kPose), "pose");
   EXPECT_STREQ(toString(RequestKind::kStatus), "status");
+  EXPECT_STREQ(toString(RequestKind::kDebug), "debug");
+  EXPECT_STREQ(toString(DebugKind::kOverrun), "overrun");
+  EXPECT_STREQ(toString(DebugKind::kStallObstacles), "stall_obstacles");
   EXPECT_STREQ(toString(static_cast<DaemonState>(200)), "unknown");
 }
 

@@ -136,6 +136,9 @@ TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
   EXPECT_EQ(c.map.name, "office");
   EXPECT_FALSE(c.map.obstacles.empty());
   EXPECT_EQ(c.hal, "sim");
+  EXPECT_EQ(c.obstacles, "sim");
+  EXPECT_FALSE(c.debug_faults);
+  EXPECT_FALSE(c.sim.movers_only);
   EXPECT_DOUBLE_EQ(c.sim.start.x, 1.5);
   EXPECT_DOUBLE_EQ(c.sim.start.y, 4.5);
   EXPECT_DOUBLE_EQ(c.sim.start.theta, 0.0);
@@ -234,7 +237,11 @@ TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
       {"heap_prefault_mb: 64", "heap_prefault_mb: 5000", {"memory.heap_prefault_mb", "0..4096", "5000"}},
       {"stack_prefault_kb: 256", "stack_prefault_kb: -4", {"memory.stack_prefault_kb", "-4"}},
       {"hal: sim", "hal: can", {"hal", "sim or socketcan", "'can'"}},
-      {"hal: sim", "hal: socketcan", {"hal", "socketcan is not built yet", "use hal: sim"}},
+      {"hal: sim", "hal: socketcan", {"socketcan: missing", "socketcan.interface", "socketcan.profile"}},
+      {"hal: sim", "hal: sim\nobstacles: camera", {"obstacles", "sim", "none", "'camera'"}},
+      {"hal: sim", "hal: sim\ndebug: {faults: maybe}", {"debug.faults", "true or false", "'maybe'"}},
+      {"hal: sim", "hal: sim\ndebug: {fault: true}", {"debug.fault", "unknown key", "faults"}},
+      {"hal: sim", "hal: sim\nsocketcan: {interface: can0, profil: x.yaml}", {"socketcan.profil", "unknown key"}},
       {"start: [1.5, 4.5, 0.0]", "start: [1.5, 4.5]", {"sim.start", "[x, y, theta]", "a list of 2 items"}},
       {"start: [1.5, 4.5, 0.0]", "start: [1.5, .nan, 0.0]", {"sim.start[1]", "finite", ".nan"}},
       {"start: [1.5, 4.5, 0.0]", "start: [1.5, x, 0.0]", {"sim.start[1]", "'x'"}},
@@ -373,6 +380,108 @@ TEST_F(ConfigFiles, RelativePathsResolveAgainstTheConfigsDirectory) {
   EXPECT_EQ(c.telemetry_path, dir_ / "etc/logs/telemetry.bin");
   EXPECT_EQ(c.svg_path, dir_ / "etc/pictures/run.svg");
   EXPECT_EQ(c.robot.name, "hsr");
+}
+
+// hal: socketcan: the interface, the CAN profile (parsed at start-up), the simulated camera.
+class SocketCanConfig : public ConfigFiles {
+ protected:
+  void SetUp() override {
+    ConfigFiles::SetUp();
+    fs::create_directories(dir_ / "can");
+    fs::copy_file(test::sourceDir() / "config/can/hsr_base.yaml", dir_ / "can/hsr_base.yaml");
+  }
+  // kValid on the SocketCAN base with `socketcan` as its section's value.
+  static std::string socketcan(const std::string& section, const std::string& obstacles = "sim") {
+    return edited("hal: sim", "hal: socketcan\nsocketcan: " + section + "\nobstacles: " + obstacles);
+  }
+};
+
+TEST_F(SocketCanConfig, ReadsTheInterfaceAndParsesTheProfile) {
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", socketcan("{interface: can0, profile: can/hsr_base.yaml}")));
+  EXPECT_EQ(c.hal, "socketcan");
+  EXPECT_EQ(c.socketcan.interface, "can0");
+  EXPECT_EQ(c.socketcan.profile_file, dir_ / "can/hsr_base.yaml");
+  EXPECT_EQ(c.socketcan.profile.name, "hsr-base-bridge");
+  EXPECT_DOUBLE_EQ(c.socketcan.profile.odometry.rate_hz, 100.0);
+  EXPECT_EQ(c.obstacles, "sim");
+  EXPECT_TRUE(c.sim.movers_only) << "the simulated camera: nobody drives the sim world's robot";
+  EXPECT_EQ(c.sim.movers, 2);
+  EXPECT_FALSE(c.debug_faults);
+
+  // A relative unix: path is made absolute against the config's directory.
+  const DaemonConfig u = loadDaemonConfig(write("u.yaml", socketcan("{interface: \"unix:run/base.sock\", profile: can/hsr_base.yaml}")));
+  EXPECT_EQ(u.socketcan.interface, "unix:" + (dir_ / "run/base.sock").string());
+  const DaemonConfig a = loadDaemonConfig(write("a.yaml", socketcan("{interface: \"unix:/tmp/b.sock\", profile: can/hsr_base.yaml}")));
+  EXPECT_EQ(a.socketcan.interface, "unix:/tmp/b.sock");
+}
+
+TEST_F(SocketCanConfig, ObstaclesNoneNeedsNoSimulatedWorld) {
+  std::string text = socketcan("{interface: vcan0, profile: can/hsr_base.yaml}", "none");
+  text.replace(text.find("  start: [1.5, 4.5, 0.0]\n"), 25, "");
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", text));
+  EXPECT_EQ(c.obstacles, "none");
+  // With obstacles: sim the start anchors the simulated world: required.
+  EXPECT_THAT(loadError(edited("obstacles: none", "obstacles: sim", text)), HasSubstr("sim.start: missing"));
+  const std::string no_sim = R"(format: staad-config/1
+robot: robots/hsr.yaml
+map: maps/office.yaml
+hal: socketcan
+socketcan: {interface: can0, profile: can/hsr_base.yaml}
+)";
+  EXPECT_THAT(loadError(no_sim), HasSubstr("sim: missing (obstacles: sim needs at least sim.start"));
+  EXPECT_EQ(loadDaemonConfig(write("none.yaml", no_sim + "obstacles: none\n")).obstacles, "none");
+}
+
+TEST_F(SocketCanConfig, BadValuesAreNamedWithTheirKeyAndLine) {
+  struct Case {
+    std::string section;
+    std::vector<std::string> expected;
+  };
+  const std::vector<Case> cases = {
+      {"{interface: \"can 0\", profile: can/hsr_base.yaml}", {"socketcan.interface", "interface name", "'can 0'"}},
+      {"{interface: averyveryverylongname0, profile: can/hsr_base.yaml}", {"socketcan.interface", "1..15"}},
+      {"{interface: \"unix:\", profile: can/hsr_base.yaml}", {"socketcan.interface", "socket path", "'unix:'"}},
+      {"{interface: \"unix:/" + std::string(120, 's') + "\", profile: can/hsr_base.yaml}", {"socketcan.interface", "107 bytes"}},
+      {"{interface: [can0], profile: can/hsr_base.yaml}", {"socketcan.interface", "a list of 1 items"}},
+      {"{profile: can/hsr_base.yaml}", {"socketcan.interface: missing"}},
+      {"{interface: can0}", {"socketcan.profile: missing"}},
+      {"{interface: can0, profile: can/none.yaml}", {"socketcan.profile", "file not found", (dir_ / "can/none.yaml").string()}},
+      {"{interface: can0, profile: can/bad.yaml}", {"socketcan.profile", "bad.yaml", "odometry.rate_hz"}},
+  };
+  std::string bad = readFile(dir_ / "can/hsr_base.yaml");
+  bad.replace(bad.find("rate_hz: 100"), 12, "rate_hz: -5");
+  write("can/bad.yaml", bad);
+  for (const Case& c : cases) {
+    const std::string text = socketcan(c.section);
+    const std::string error = loadError(text);
+    SCOPED_TRACE(c.section + "  ->  " + error);
+    for (const std::string& e : c.expected) EXPECT_THAT(error, HasSubstr(e));
+    EXPECT_THAT(error, HasSubstr("staad.yaml:" + std::to_string(lineOf(text, "socketcan: ")) + ": "));
+  }
+}
+
+TEST_F(SocketCanConfig, HalFromTheCommandLineIsAppliedBeforeItsSectionIsRead) {
+  // --hal socketcan on a sim config without a socketcan section: named as missing.
+  const fs::path sim = write("staad.yaml", kValid);
+  try {
+    loadDaemonConfig(sim, "socketcan");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("socketcan: missing"));
+  }
+  // --hal sim on a socketcan config: the sim section is read (and the socketcan one only
+  // checked for typos).
+  const DaemonConfig c = loadDaemonConfig(write("can.yaml", socketcan("{interface: can0, profile: can/hsr_base.yaml}")), "sim");
+  EXPECT_EQ(c.hal, "sim");
+  EXPECT_FALSE(c.sim.movers_only);
+  EXPECT_DOUBLE_EQ(c.sim.start.x, 1.5);
+  EXPECT_THROW(loadDaemonConfig(sim, "warp"), ConfigError);
+}
+
+TEST_F(ConfigFiles, DebugFaultsAreOffUnlessAsked) {
+  EXPECT_FALSE(loadDaemonConfig(write("staad.yaml", kValid)).debug_faults);
+  EXPECT_TRUE(loadDaemonConfig(write("on.yaml", edited("hal: sim", "hal: sim\ndebug: {faults: true}"))).debug_faults);
+  EXPECT_FALSE(loadDaemonConfig(write("off.yaml", edited("hal: sim", "hal: sim\ndebug: {faults: false}"))).debug_faults);
 }
 
 TEST_F(ConfigFiles, MissingConfigFileNamesThePath) {
