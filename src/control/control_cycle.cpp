@@ -113,7 +113,9 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   const double dist = (robot.position() - goal.position()).norm();
   const bool heading_ok = config_.goal_heading_tolerance > kPi ||
                           std::abs(wrapAngle(robot.theta - goal.theta)) <= config_.goal_heading_tolerance;
-  const bool slow = !config_.staa.heuristic.stop_at_goal || std::abs(robot.v) <= config_.goal_speed_tolerance;
+  const double speed_tolerance =
+      config_.goal_speed_tolerance > 0.0 ? config_.goal_speed_tolerance : std::min(0.25, 0.2 * robot_.limits.v_max);
+  const bool slow = !config_.staa.heuristic.stop_at_goal || std::abs(robot.v) <= speed_tolerance;
   if (state_ == CycleState::kReached || (dist <= config_.goal_tolerance_m && heading_ok && slow)) {
     state_ = CycleState::kReached;
     return stop(robot, state_);

@@ -37,8 +37,10 @@ struct ControlConfig {
   double goal_tolerance_m = 0.2;        // position error that counts as arrived
   double goal_heading_tolerance = 0.4;  // rad; > pi ignores the heading
   // Arrival also needs the robot (nearly) stopped when the planner stops at goals
-  // (staa.heuristic.stop_at_goal); |v| at most this.
-  double goal_speed_tolerance = 0.25;
+  // (staa.heuristic.stop_at_goal); |v| at most this. 0: a fifth of the robot's top speed, at
+  // most 0.25 m/s (a fixed 0.25 m/s was above the HSR's top speed of 0.22 m/s: it reported
+  // `reached` at full speed, 0.2 m before the goal).
+  double goal_speed_tolerance = 0.0;
   double inflation_m = 0.0;             // M' growth; 0: the footprint's circumradius
   // D' growth (moving obstacles, for the paths only: collisions are checked exactly). 0: the
   // footprint's half-width plus 5 cm. Passing a person, the robot drives alongside, not

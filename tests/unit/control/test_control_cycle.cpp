@@ -138,6 +138,8 @@ struct Drive {
   RobotState end;
   int unreachable_cycles = 0;
   int held_cycles = 0;
+  double reached_speed = -1.0;  // |v| when the cycle first said reached; < 0: never
+  Pose2 reached_pose;
 };
 Drive drive(ControlCycle& cycle, const PolygonMap& map, const RobotProfile& robot, const RobotState& start, int cycles) {
   World world(map, robot, start.pose);
@@ -150,6 +152,10 @@ Drive drive(ControlCycle& cycle, const PolygonMap& map, const RobotProfile& robo
     const CycleOutput out = cycle.step(in, PlannerBudget::expansions(1000));
     d.unreachable_cycles += out.state == CycleState::kUnreachable ? 1 : 0;
     d.held_cycles += out.path_held ? 1 : 0;
+    if (out.state == CycleState::kReached && d.reached_speed < 0.0) {
+      d.reached_speed = std::abs(s.v);
+      d.reached_pose = s.pose;
+    }
     const StepOutcome o = world.step(1.0 / cycle.config().rate_hz, out.v_cmd, out.w_cmd);
     d.collisions += o.new_episode ? 1 : 0;
   }
@@ -182,6 +188,23 @@ TEST(ControlCycle, WithoutAPathAMovingRobotStopsClearOfTheObstacleAhead) {
   plain.setGoal(goal);
   const Drive without = drive(plain, map, robot, start, 60);
   EXPECT_GT(without.collisions, 0);
+}
+
+// `reached` means stopped at the goal for a slow robot too: the HSR's top speed (0.22 m/s)
+// is below the paper agent's speed tolerance (0.25 m/s), which made it report `reached` at
+// full speed, 0.2 m before the goal; the tolerance now scales with the robot.
+TEST(ControlCycle, TheHsrReportsReachedOnlyWhenNearlyStoppedAtTheGoal) {
+  const PolygonMap map = generateOfficeMap();
+  const RobotProfile robot = loadRobotProfile(std::string(STAA_SOURCE_DIR) + "/config/robots/hsr.yaml");
+  ControlCycle cycle(map, robot, ControlConfig{});
+  const Pose2 goal{4.0, 4.5, 0.0};
+  cycle.setGoal(goal);
+  const Drive d = drive(cycle, map, robot, RobotState{Pose2{1.5, 4.5, 0.0}, 0.0, 0.0}, 30 * 30);
+  ASSERT_GE(d.reached_speed, 0.0) << "never reached; ended at " << d.end.pose.x << ", " << d.end.pose.y;
+  EXPECT_LE(d.reached_speed, 0.2 * 0.22 + 1e-9);
+  EXPECT_LE((d.reached_pose.position() - goal.position()).norm(), ControlConfig{}.goal_tolerance_m);
+  EXPECT_EQ(d.collisions, 0);
+  EXPECT_NEAR(d.end.v, 0.0, 0.02);
 }
 
 }  // namespace
