@@ -9,6 +9,7 @@
 // even right after the previous one was reached; `--svg FILE` leaves a picture of the run.
 //
 // Every wait has a timeout, and every process this test starts is killed in teardown.
+#include "child_process.hpp"
 #include "shared_dir.hpp"
 
 #include <gtest/gtest.h>
@@ -40,8 +41,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
-
 namespace {
 
 namespace fs = std::filesystem;
@@ -57,87 +56,8 @@ std::string readFile(const fs::path& p) {
   return ss.str();
 }
 
-// A child process, killed (SIGKILL) and reaped when this goes out of scope.
-class Child {
- public:
-  Child() = default;
-  Child(const std::vector<std::string>& argv, const std::vector<std::string>& env, const fs::path& out,
-        const fs::path& err) {
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> args;
-    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    std::vector<char*> envp;
-    for (const std::string& e : env) envp.push_back(const_cast<char*>(e.c_str()));
-    envp.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, argv[0].c_str(), &fa, nullptr, args.data(), envp.data());
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0) pid_ = -1;
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  Child(Child&& o) noexcept : pid_(o.pid_), status_(o.status_), reaped_(o.reaped_) { o.pid_ = -1; }
-  Child& operator=(Child&& o) noexcept {
-    if (this != &o) {
-      kill();
-      pid_ = o.pid_;
-      status_ = o.status_;
-      reaped_ = o.reaped_;
-      o.pid_ = -1;
-    }
-    return *this;
-  }
-  ~Child() { kill(); }
-
-  pid_t pid() const { return pid_; }
-  bool alive() { return pid_ > 0 && !reaped_ && !poll(); }
-  // Waits up to `timeout` for the exit; the exit code, or nullopt (still running / killed).
-  std::optional<int> wait(milliseconds timeout) {
-    const auto deadline = Clock::now() + timeout;
-    while (!poll()) {
-      if (Clock::now() >= deadline) return std::nullopt;
-      std::this_thread::sleep_for(milliseconds(2));
-    }
-    if (WIFEXITED(status_)) return WEXITSTATUS(status_);
-    return std::nullopt;
-  }
-  void signal(int sig) {
-    if (pid_ > 0 && !reaped_) ::kill(pid_, sig);
-  }
-  void kill() {
-    if (pid_ <= 0 || reaped_) return;
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, &status_, 0);
-    reaped_ = true;
-  }
-
- private:
-  bool poll() {
-    if (reaped_) return true;
-    if (pid_ <= 0) return true;
-    const pid_t r = ::waitpid(pid_, &status_, WNOHANG);
-    if (r == pid_) reaped_ = true;
-    return reaped_;
-  }
-  pid_t pid_ = -1;
-  int status_ = 0;
-  bool reaped_ = false;
-};
-
-std::vector<std::string> environmentWithout(const std::vector<std::string>& drop_prefixes) {
-  std::vector<std::string> env;
-  for (char** e = environ; *e != nullptr; ++e) {
-    const std::string entry(*e);
-    bool keep = true;
-    for (const std::string& p : drop_prefixes) keep = keep && entry.rfind(p, 0) != 0;
-    if (keep) env.push_back(entry);
-  }
-  return env;
-}
+using staa::test::Child;
+using staa::test::environmentWithout;
 
 // The datagram socket that plays systemd's notification socket. Like systemd, it reads every
 // datagram as it comes (a background thread): a full receive queue would block the sender.
