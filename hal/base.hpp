@@ -54,6 +54,13 @@ struct VelocityCommand {
   bool brake = false;    // a stop command: v = w = 0 with the base's full deceleration
 };
 
+// When the base last handed a command frame over to its transport (hal/socketcan: when
+// sendmsg returned), and which command it carried: for the command-to-wire latency.
+struct CommandSent {
+  rt::Nanos command_stamp = -1;  // the VelocityCommand::stamp it carried; < 0: none sent yet
+  rt::Nanos sent_at = -1;        // on the command's clock (CLOCK_MONOTONIC in staad)
+};
+
 class Base {
  public:
   virtual ~Base() = default;
@@ -66,6 +73,9 @@ class Base {
   // Sets the pose estimate (staactl pose): the sim moves its robot there only when it is
   // free; a real base re-anchors its odometry. Returns false with no change when refused.
   virtual bool setPose(const Pose2& pose) = 0;
+  // The last command frame sent (written by write(); none by default: a backend that does not
+  // know reports nothing, and no command-to-wire latency is measured).
+  virtual CommandSent lastCommandSent() const { return {}; }
 };
 
 }  // namespace staa::hal

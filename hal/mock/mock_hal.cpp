@@ -49,10 +49,21 @@ void MockBase::read(rt::Nanos now) {
   status_.stamp = last_read_;
 }
 
-void MockBase::write(rt::Nanos /*now*/, const VelocityCommand& command) {
+void MockBase::write(rt::Nanos now, const VelocityCommand& command) {
   std::lock_guard lock(mutex_);
   last_command_ = command;
+  if (send_delay_ >= 0) sent_ = {command.stamp, now + send_delay_};
   if (log_.size() < max_commands_) log_.push_back(command);  // reserved: no allocation
+}
+
+CommandSent MockBase::lastCommandSent() const {
+  std::lock_guard lock(mutex_);
+  return sent_;
+}
+
+void MockBase::setSendDelay(rt::Nanos delay) {
+  std::lock_guard lock(mutex_);
+  send_delay_ = delay;
 }
 
 Odometry MockBase::odometry() const {

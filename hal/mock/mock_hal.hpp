@@ -25,6 +25,8 @@ class MockBase final : public Base {
   Odometry odometry() const override;
   BaseStatus status() const override;
   bool setPose(const Pose2& pose) override;
+  // The last command written, "sent" at write()'s now plus the scripted send delay.
+  CommandSent lastCommandSent() const override;
 
   // Script: integrate commands into the pose (default on), or hold the odometry as set.
   void setIntegrate(bool on);
@@ -33,6 +35,9 @@ class MockBase final : public Base {
   void freezeOdometry(bool frozen);
   void setFault(BaseFault fault, std::uint32_t code = 0);
   void setEnabled(bool enabled);
+  // A command written at `now` counts as sent at now + delay (a driver's send path), or not
+  // at all with a delay < 0 (a driver that has not sent it yet).
+  void setSendDelay(rt::Nanos delay);
   // Every command written, in order (copy; takes the lock).
   std::vector<VelocityCommand> commands() const;
   VelocityCommand lastCommand() const;
@@ -47,6 +52,8 @@ class MockBase final : public Base {
   bool frozen_ = false;
   rt::Nanos last_read_ = -1;
   VelocityCommand last_command_;
+  CommandSent sent_;
+  rt::Nanos send_delay_ = 0;
   std::vector<VelocityCommand> log_;
   std::size_t max_commands_;
 };

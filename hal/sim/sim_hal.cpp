@@ -188,12 +188,15 @@ class SimHal::SimBase final : public Base {
     publishMovers(stamp_);
   }
 
-  void write(rt::Nanos /*now*/, const VelocityCommand& command) override {
+  void write(rt::Nanos now, const VelocityCommand& command) override {
     // World::step throws on non-finite commands; a NaN from upstream is a stop, not a crash.
     const bool stop = command.brake || !std::isfinite(command.v) || !std::isfinite(command.w);
     v_cmd_ = stop ? 0.0 : command.v;
     w_cmd_ = stop ? 0.0 : command.w;
+    sent_ = {command.stamp, now};  // no wire: the world takes it at the write
   }
+
+  CommandSent lastCommandSent() const override { return sent_; }
 
   Odometry odometry() const override { return odometry_; }
 
@@ -268,6 +271,7 @@ class SimHal::SimBase final : public Base {
   rt::Nanos stamp_ = -1;
   double v_cmd_ = 0.0;
   double w_cmd_ = 0.0;
+  CommandSent sent_;
   // The last odometry report: while frozen it stays as it was (a stalled odometry stream),
   // though the world moves on; unfrozen, the next read reports the truth again.
   Odometry odometry_;

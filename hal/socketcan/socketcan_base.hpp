@@ -6,7 +6,9 @@
 // rolling counter, integrates the pose from the odometry's v, w and dt (anchored by
 // setPose), and keeps the base's status and the fault. write(now, command) sends the command
 // at command.rate_hz (at once when braking starts or motion stops) and the host heartbeat at
-// heartbeat.rate_hz. Neither allocates, locks or blocks.
+// heartbeat.rate_hz. Neither allocates, locks or blocks. lastCommandSent() says when the
+// last command frame went to the kernel (the clock read as sendmsg returned) and which
+// command it carried: the daemon's command-to-wire latency.
 //
 // Fault precedence (status().fault shows the first that holds; each clears with its cause):
 //   kBusOff         bus-off error frame, or transport gone; until a valid frame arrives or
@@ -48,13 +50,17 @@ struct SocketCanCounters {
 
 class SocketCanBase final : public Base {
  public:
-  SocketCanBase(CanTransport transport, CanProfile profile, const Pose2& start = {});
+  // `clock` stamps lastCommandSent() (the daemon's clock; nullptr: CLOCK_MONOTONIC). It
+  // must outlive the driver.
+  SocketCanBase(CanTransport transport, CanProfile profile, const Pose2& start = {},
+                const rt::Clock* clock = nullptr);
 
   void read(rt::Nanos now) override;
   void write(rt::Nanos now, const VelocityCommand& command) override;
   Odometry odometry() const override { return odometry_; }
   BaseStatus status() const override;
   bool setPose(const Pose2& pose) override;
+  CommandSent lastCommandSent() const override { return last_command_sent_; }
 
   const SocketCanCounters& counters() const { return counters_; }
   const CanProfile& profile() const { return profile_; }
@@ -87,6 +93,7 @@ class SocketCanBase final : public Base {
 
   CanTransport transport_;
   CanProfile profile_;
+  const rt::Clock* clock_;  // nullptr: CLOCK_MONOTONIC
   // The profile's periods and timeouts in nanoseconds.
   rt::Nanos command_period_ = 0, heartbeat_period_ = 0, recovery_interval_ = 0;
   rt::Nanos odometry_timeout_ = 0, status_timeout_ = 0, heartbeat_timeout_ = 0;
@@ -109,8 +116,10 @@ class SocketCanBase final : public Base {
   std::uint8_t command_counter_ = 0, heartbeat_counter_ = 0;
   rt::Nanos last_command_tx_ = -1, last_heartbeat_tx_ = -1, last_probe_tx_ = -1;
   rt::Nanos next_command_tx_ = 0;  // the command grid's next slot
+  rt::Nanos last_sent_stamp_ = -2;  // the stamp of the command last sent (-2: none yet)
   bool last_sent_brake_ = false;
   bool last_sent_motion_ = false;
+  CommandSent last_command_sent_;  // the bus-off probe carries no command: not recorded
 };
 
 }  // namespace staa::hal

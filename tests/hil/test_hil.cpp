@@ -11,6 +11,8 @@
 // when the fault clears (except after SIGKILL, where basesim stops on its own 0.5 s command
 // timeout). Each fault prints one summary line, e.g.
 //   HIL fault=estop detect_ms=21 standstill_ms=463 bound_ms=960 v0=0.220
+// The goal test also checks the base I/O path's timing in the status (`threads.base`,
+// `base.command_to_wire`) and prints it (`HIL base_io ...`).
 //
 // Every wait polls with a deadline; every process this test starts is killed in teardown.
 #include "shared_dir.hpp"
@@ -477,6 +479,34 @@ TEST_F(Hil, DrivesToAGoalOverCanAndTheBaseTrulyEndsThere) {
   EXPECT_EQ((*s)["base"]["bad_frames"], 0) << s->dump();
   EXPECT_EQ((*b)["bad_frames"], 0) << "basesim refused frames of staad: " << b->dump();
   std::printf("HIL goal reached_ms=%.0f base_off_goal_m=%.3f odometry_drift_m=%.4f\n", msSince(t0), off, drift);
+
+  // The base I/O path's timing: the base thread's loop and the command-to-wire latency (a
+  // control command's stamp to the driver's sendmsg of its first frame), with sane values.
+  const Json& thread = (*s)["threads"]["base"];
+  const Json& wire = (*s)["base"]["command_to_wire"];
+  for (const Json* h : {&thread["cycle"], &thread["wake"], &wire}) {
+    EXPECT_GT((*h)["p50_us"].get<double>(), 0.0) << s->dump();
+    EXPECT_GE((*h)["p99_us"].get<double>(), (*h)["p50_us"].get<double>()) << s->dump();
+    EXPECT_GE((*h)["max_us"].get<double>(), (*h)["p99_us"].get<double>()) << s->dump();
+    EXPECT_LT((*h)["max_us"].get<double>(), 1e6) << s->dump();
+  }
+  // 100 Hz while driving (several seconds); commands at the profile's 30 Hz.
+  EXPECT_GT(thread["cycle"]["count"].get<std::uint64_t>(), 300u) << s->dump();
+  EXPECT_GT(wire["count"].get<std::uint64_t>(), 90u) << s->dump();
+  EXPECT_FALSE(thread["realtime"].get<bool>()) << "the HIL config asks for normal scheduling";
+  // A command's way to the wire: the rest of its control cycle (the planner's budget), the
+  // base thread's next period, the driver's next 30 Hz slot; older than 3 control periods it
+  // is never sent.
+  EXPECT_LT(wire["p50_us"].get<double>(), 1e6 * 3 * kControlPeriodS) << s->dump();
+  std::printf("HIL base_io wake_us=%.0f/%.0f/%.0f exec_us=%.0f/%.0f/%.0f command_to_wire_us=%.0f/%.0f/%.0f "
+              "commands=%llu unsent=%llu overruns=%llu (p50/p99/max)\n",
+              thread["wake"]["p50_us"].get<double>(), thread["wake"]["p99_us"].get<double>(),
+              thread["wake"]["max_us"].get<double>(), thread["cycle"]["p50_us"].get<double>(),
+              thread["cycle"]["p99_us"].get<double>(), thread["cycle"]["max_us"].get<double>(),
+              wire["p50_us"].get<double>(), wire["p99_us"].get<double>(), wire["max_us"].get<double>(),
+              static_cast<unsigned long long>(wire["count"].get<std::uint64_t>()),
+              static_cast<unsigned long long>(wire["unsent"].get<std::uint64_t>()),
+              static_cast<unsigned long long>(thread["cycle"]["overruns"].get<std::uint64_t>()));
 
   // SIGTERM: staad brakes and exits 0.
   daemon_.signal(SIGTERM);

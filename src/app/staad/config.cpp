@@ -5,6 +5,8 @@
 #include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
 #include "hal/obstacles.hpp"
+#include "perception/camera_model.hpp"
+#include "perception/depth_obstacles.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -20,6 +22,7 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 #include <vector>
 
@@ -254,24 +257,167 @@ void readBudget(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
 void readObstacles(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
   const YAML::Node n = root["obstacles"];
   if (!n.IsDefined()) return;
-  config.obstacles = r.string(n, "obstacles", "sim or none");
-  if (config.obstacles != "sim" && config.obstacles != "none") {
-    r.fail(n, "obstacles", "expected sim (the simulator's movers) or none (no obstacle sensor: empty frames), got " + describe(n));
+  config.obstacles = r.string(n, "obstacles", "sim, depth or none");
+  if (config.obstacles != "sim" && config.obstacles != "depth" && config.obstacles != "none") {
+    r.fail(n, "obstacles", "expected sim (the simulator's movers), depth (a depth camera: the camera section) or none (no "
+                           "obstacle sensor: empty frames), got " + describe(n));
   }
+}
+
+// camera.perception: the DepthObstaclesConfig fields a robot is tuned with (the tracker's
+// noise model stays at its defaults). `stride` is pixel_stride.
+void readPerception(const Reader& r, const YAML::Node& camera, CameraConfig& c) {
+  DepthObstaclesConfig& p = c.perception;
+  const YAML::Node perception = r.section(camera, "perception", "camera.perception",
+                                          {"stride", "min_depth_m", "max_range_m", "min_height_m", "max_height_m", "cell_m",
+                                           "min_points_per_cell", "min_cluster_points", "cluster_gap_m", "static_margin_m",
+                                           "max_vertices", "gate_m", "max_speed_mps", "max_missed_frames"});
+  if (perception.IsDefined()) {
+    const std::string w = "camera.perception.";
+    auto positive = [&](const char* key, const char* unit, double& out) {
+      if (const YAML::Node n = perception[key]; n.IsDefined()) out = r.above(n, w + key, 0.0, std::string("must be > 0 ") + unit);
+    };
+    auto nonNegative = [&](const char* key, double& out) {
+      const YAML::Node n = perception[key];
+      if (!n.IsDefined()) return;
+      out = r.finite(n, w + key);
+      if (out < 0.0) r.fail(n, w + key, "must be >= 0 m, got " + n.Scalar());
+    };
+    auto count = [&](const char* key, long long lo, long long hi, const char* meaning) {
+      const YAML::Node n = perception[key];
+      return n.IsDefined() ? std::optional<long long>(r.integer(n, w + key, lo, hi, meaning)) : std::nullopt;
+    };
+    if (const auto v = count("stride", 1, 16, " (every n-th pixel of every n-th row)")) p.pixel_stride = static_cast<int>(*v);
+    nonNegative("min_depth_m", p.min_depth_m);
+    positive("max_range_m", "m", p.max_range_m);
+    if (const YAML::Node n = perception["min_height_m"]; n.IsDefined()) p.min_height_m = r.finite(n, w + "min_height_m");
+    if (const YAML::Node n = perception["max_height_m"]; n.IsDefined()) p.max_height_m = r.finite(n, w + "max_height_m");
+    positive("cell_m", "m", p.cell_m);
+    if (const auto v = count("min_points_per_cell", 1, 65535, "")) p.min_points_per_cell = static_cast<int>(*v);
+    if (const auto v = count("min_cluster_points", 1, 1'000'000, "")) p.min_cluster_points = static_cast<int>(*v);
+    if (const YAML::Node n = perception["cluster_gap_m"]; n.IsDefined()) p.cluster_gap_m = r.finite(n, w + "cluster_gap_m");
+    nonNegative("static_margin_m", p.static_margin_m);
+    if (const auto v = count("max_vertices", 4, static_cast<long long>(hal::ObstacleFrame::kMaxVertices), "")) {
+      p.max_vertices = static_cast<std::size_t>(*v);
+    }
+    positive("gate_m", "m", p.gate_m);
+    positive("max_speed_mps", "m/s", p.max_speed_mps);
+    if (const auto v = count("max_missed_frames", 0, 1000, "")) p.max_missed_frames = static_cast<int>(*v);
+  }
+
+  // Rules between fields: named at the key that breaks them (or the section, for defaults).
+  const auto at = [&](const char* key) -> YAML::Node {
+    if (perception.IsDefined() && perception[key].IsDefined()) return perception[key];
+    return perception.IsDefined() ? Reader::keyOf(camera, "perception") : Reader::keyOf(camera, "backend");
+  };
+  if (!(p.max_height_m > p.min_height_m)) {
+    r.fail(at("max_height_m"), "camera.perception.max_height_m",
+           "must be > min_height_m (" + number(p.min_height_m) + " m), got " + number(p.max_height_m));
+  }
+  if (!(p.cluster_gap_m >= p.cell_m && p.cluster_gap_m <= 5.0 * p.cell_m)) {
+    r.fail(at("cluster_gap_m"), "camera.perception.cluster_gap_m",
+           "must be in [cell_m, 5 * cell_m] = [" + number(p.cell_m) + ", " + number(5.0 * p.cell_m) + "] m, got " +
+               number(p.cluster_gap_m));
+  }
+  // The occupancy grid spans max_range_m (plus the mount's offset) around the robot: at most
+  // 998 cells of it (the detector's 2000 x 2000 cells).
+  const double reach = p.max_range_m + std::hypot(c.mount.x, c.mount.y);
+  if (reach / p.cell_m > 998.0) {
+    r.fail(at("cell_m"), "camera.perception.cell_m",
+           "too small for max_range_m " + number(p.max_range_m) + " m (+ the mount's " + number(reach - p.max_range_m) +
+               " m offset): at most 998 cells of range, got " + number(p.cell_m));
+  }
+  try {
+    validateDepthObstaclesConfig(p);
+    validateCamera(c.intrinsics, c.mount);
+  } catch (const std::invalid_argument& e) {
+    r.fail(Reader::keyOf(camera, perception.IsDefined() ? "perception" : "backend"), "camera", e.what());
+  }
+}
+
+// obstacles: depth: the camera section. Every value is checked here with its key and line
+// (the perception library's own validation runs last, as a backstop for a rule added there).
+void readCamera(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
+  const YAML::Node camera =
+      r.section(root, "camera", "camera", {"backend", "uri", "intrinsics", "mount", "sim_noise_mm_per_m2", "perception"});
+  if (config.obstacles != "depth") return;  // checked for typos only
+  if (!camera.IsDefined()) {
+    r.fail(Reader::keyOf(root, "obstacles"), "camera",
+           "missing (obstacles: depth needs camera.backend: sim, frames rendered from the simulated world, or openni2, "
+           "the Xtion)");
+  }
+  CameraConfig& c = config.camera;
+  const YAML::Node backend = r.required(camera, "backend", "camera.backend", "sim or openni2");
+  c.backend = r.string(backend, "camera.backend", "sim or openni2");
+  if (c.backend != "sim" && c.backend != "openni2") {
+    r.fail(backend, "camera.backend",
+           "expected sim (frames rendered from the simulated world) or openni2 (the Xtion), got " + describe(backend));
+  }
+  if (const YAML::Node n = camera["uri"]; n.IsDefined()) {
+    c.uri = n.IsNull() ? std::string() : r.string(n, "camera.uri", "an OpenNI2 device URI, or \"\" for any device");
+  }
+
+  if (const YAML::Node k = r.section(camera, "intrinsics", "camera.intrinsics", {"fx", "fy", "cx", "cy"}); k.IsDefined()) {
+    if (const YAML::Node n = k["fx"]; n.IsDefined()) c.intrinsics.fx = r.above(n, "camera.intrinsics.fx", 0.0, "must be > 0 pixels");
+    if (const YAML::Node n = k["fy"]; n.IsDefined()) c.intrinsics.fy = r.above(n, "camera.intrinsics.fy", 0.0, "must be > 0 pixels");
+    auto centre = [&](const char* key, double size, double& out) {
+      const YAML::Node n = k[key];
+      if (!n.IsDefined()) return;
+      const std::string where = std::string("camera.intrinsics.") + key;
+      out = r.finite(n, where);
+      if (!(out >= 0.0 && out < size)) r.fail(n, where, "must be inside the image, in [0, " + number(size) + ") pixels, got " + n.Scalar());
+    };
+    centre("cx", hal::DepthFrame::kWidth, c.intrinsics.cx);
+    centre("cy", hal::DepthFrame::kHeight, c.intrinsics.cy);
+  }
+
+  if (const YAML::Node m = r.section(camera, "mount", "camera.mount", {"x", "y", "z", "roll", "pitch", "yaw"}); m.IsDefined()) {
+    auto metres = [&](const char* key, double& out) {
+      if (const YAML::Node n = m[key]; n.IsDefined()) out = r.finite(n, std::string("camera.mount.") + key);
+    };
+    metres("x", c.mount.x);
+    metres("y", c.mount.y);
+    if (const YAML::Node n = m["z"]; n.IsDefined()) c.mount.z = r.above(n, "camera.mount.z", 0.0, "must be > 0 m (above the floor)");
+    // Radians: a value beyond pi is most likely degrees.
+    auto angle = [&](const char* key, double& out) {
+      const YAML::Node n = m[key];
+      if (!n.IsDefined()) return;
+      const std::string where = std::string("camera.mount.") + key;
+      out = r.finite(n, where);
+      if (!(std::abs(out) <= kPi)) r.fail(n, where, "must be in [-pi, pi] rad (degrees? 17 deg is 0.297 rad), got " + n.Scalar());
+    };
+    angle("roll", c.mount.roll);
+    angle("pitch", c.mount.pitch);
+    angle("yaw", c.mount.yaw);
+  }
+
+  if (const YAML::Node n = camera["sim_noise_mm_per_m2"]; n.IsDefined()) {
+    c.sim_noise_mm_per_m2 = r.finite(n, "camera.sim_noise_mm_per_m2");
+    if (c.sim_noise_mm_per_m2 < 0.0) r.fail(n, "camera.sim_noise_mm_per_m2", "must be >= 0 (0: exact depths), got " + n.Scalar());
+  }
+
+  readPerception(r, camera, c);
 }
 
 void readSim(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
   const YAML::Node sim = r.section(root, "sim", "sim", {"start", "movers", "mover_speed", "mover_radius", "seed", "sensor_range_m"});
   // The simulated obstacles arrive at the perception rate, like a depth camera's frames.
   config.sim.obstacle_rate_hz = config.perception_hz;
+  // obstacles: depth with camera.backend: sim renders the simulated world's movers too.
+  const bool sim_camera = config.obstacles == "depth" && config.camera.backend == "sim";
   // A real base without simulated obstacles ignores the section (it is still checked for typos).
-  if (config.hal != "sim" && config.obstacles != "sim") return;
+  if (config.hal != "sim" && config.obstacles != "sim" && !sim_camera) return;
   // With a real base the simulated world only moves its movers (the simulated camera): its
   // own robot stands at sim.start, where the movers' walks keep away from.
   config.sim.movers_only = config.hal != "sim";
   if (!sim.IsDefined()) {
     if (config.hal == "sim") {
       r.fail(Reader::keyOf(root, "hal"), "sim", "missing (hal: sim needs at least sim.start: [x, y, theta], free in the map)");
+    }
+    if (sim_camera) {
+      r.fail(Reader::keyOf(root, "camera"), "sim",
+             "missing (camera.backend: sim renders the simulated world: it needs at least sim.start: [x, y, theta], free "
+             "in the map, where that world is anchored; or camera.backend: openni2)");
     }
     r.fail(Reader::keyOf(root, "obstacles"), "sim",
            "missing (obstacles: sim needs at least sim.start: [x, y, theta], free in the map, where the simulated world "
@@ -326,6 +472,9 @@ void readSim(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
   if (const YAML::Node n = sim["sensor_range_m"]; n.IsDefined()) {
     config.sim.sensor_range_m = r.above(n, "sim.sensor_range_m", 0.0, "must be > 0 m");
   }
+  // The depth camera sees what its own range (and the walls) let it see: every mover is
+  // rendered (with a real base sensor_range_m would be measured from sim.start).
+  if (sim_camera) config.sim.sensor_range_m = std::numeric_limits<double>::infinity();
 }
 
 // A network interface name as the kernel takes it (dev_valid_name): 1..15 bytes, not "." or
@@ -533,8 +682,8 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
     throw ConfigError(source.string() + ": expected a mapping with format: " + std::string(kFormat) + ", robot, map, ..., got " +
                       describe(root));
   }
-  r.onlyKeys(root, "", {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "rates", "budget", "threads", "socket",
-                        "limits", "goal", "telemetry", "memory", "debug"});
+  r.onlyKeys(root, "", {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "camera", "rates", "budget", "threads",
+                        "socket", "limits", "goal", "telemetry", "memory", "debug"});
   const YAML::Node format = root["format"];
   if (!Reader::present(format)) r.fail(root, "format", "missing (expected " + std::string(kFormat) + ")");
   if (!format.IsScalar() || format.Scalar() != kFormat) {
@@ -557,6 +706,7 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   readRates(r, root, config);
   readBudget(r, root, config);
   readObstacles(r, root, config);
+  readCamera(r, root, config);
   readSim(r, root, config);
   readSocketCan(r, root, base, config);
   readThreads(r, root, config);

@@ -11,7 +11,17 @@
 //   hal: sim                                 # sim | socketcan
 //   sim: {start: [1.5, 4.5, 0.0], movers: 3, mover_speed: 0.8, seed: 1}
 //   socketcan: {interface: can0, profile: can/hsr_base.yaml}  # hal: socketcan ("unix:/path" in tests)
-//   obstacles: sim                           # sim (the simulator's movers) | none
+//   obstacles: sim                           # sim (the simulator's movers) | depth | none
+//   camera:                                  # obstacles: depth (backend required then)
+//     backend: sim                           # sim (rendered frames of the sim world) | openni2
+//     uri: ""                                # openni2 device URI; empty: any
+//     intrinsics: {fx: 570.3, fy: 570.3, cx: 319.5, cy: 239.5}
+//     mount: {x: 0.0, y: 0.0, z: 1.0, roll: 0.0, pitch: 0.3, yaw: 0.0}  # rad; pitch > 0: down
+//     sim_noise_mm_per_m2: 1.5               # backend sim: depth noise (sigma per depth^2)
+//     perception: {stride: 4, min_depth_m: 0.45, max_range_m: 4.5, min_height_m: 0.05,
+//                  max_height_m: 1.8, cell_m: 0.1, min_points_per_cell: 3,
+//                  min_cluster_points: 8, cluster_gap_m: 0.3, static_margin_m: 0.15,
+//                  max_vertices: 16, gate_m: 0.5, max_speed_mps: 2.5, max_missed_frames: 5}
 //   rates: {control_hz: 30, base_hz: 100, perception_hz: 30}
 //   budget: {ms: 19}                         # or {expansions: 1000}
 //   threads:                                 # priority 0: normal scheduling; cpu -1: any
@@ -29,7 +39,9 @@
 #include "control/robot_profile.hpp"
 #include "hal/sim/sim_hal.hpp"
 #include "hal/socketcan/can_profile.hpp"
+#include "hal/depth_camera.hpp"
 #include "map/polygon_map.hpp"
+#include "perception/depth_obstacles.hpp"
 #include "rt/realtime.hpp"
 
 #include <cstdint>
@@ -55,6 +67,17 @@ struct SocketCanConfig {
   hal::CanProfile profile;
 };
 
+// obstacles: depth: the depth camera and the perception that turns its frames into the
+// obstacle frames (src/app/staad/depth_sensor.hpp).
+struct CameraConfig {
+  std::string backend = "sim";  // sim (frames rendered from the sim world) | openni2 (the Xtion)
+  std::string uri;              // openni2: the device's URI; empty: any device
+  hal::CameraIntrinsics intrinsics;
+  hal::CameraMount mount{0.0, 0.0, 1.0, 0.0, 0.3, 0.0};  // the HSR's head, looking down ahead
+  double sim_noise_mm_per_m2 = 1.5;  // backend sim: depth noise, Kinect-class (SimDepthConfig)
+  DepthObstaclesConfig perception;   // camera.perception (stride = pixel_stride)
+};
+
 struct DaemonConfig {
   std::filesystem::path file;        // where it was loaded from
   std::filesystem::path robot_file;
@@ -62,9 +85,10 @@ struct DaemonConfig {
   std::filesystem::path map_file;
   PolygonMap map;
   std::string hal = "sim";           // sim | socketcan
-  hal::SimHalConfig sim;              // hal: sim, or obstacles: sim (the simulated camera)
+  hal::SimHalConfig sim;              // hal: sim, obstacles: sim, or obstacles: depth with camera.backend: sim
   SocketCanConfig socketcan;          // hal: socketcan
-  std::string obstacles = "sim";      // sim (the sim world's movers) | none (empty frames)
+  std::string obstacles = "sim";      // sim (the sim world's movers) | depth (camera) | none (empty frames)
+  CameraConfig camera;                // obstacles: depth
   double control_hz = 30.0;
   double base_hz = 100.0;
   double perception_hz = 30.0;

@@ -2,6 +2,7 @@
 
 #include "app/staad/channels.hpp"
 #include "app/staad/control_task.hpp"
+#include "app/staad/depth_sensor.hpp"
 #include "app/staad/io_tasks.hpp"
 #include "app/staad/service.hpp"
 #include "hal/sim/sim_hal.hpp"
@@ -76,6 +77,9 @@ class Daemon {
   std::unique_ptr<hal::SimHal> sim_;                // hal: sim, or obstacles: sim
   std::unique_ptr<hal::SocketCanBase> can_base_;    // hal: socketcan
   std::unique_ptr<NoObstacles> no_obstacles_;       // obstacles: none
+  std::unique_ptr<OdometrySlot> odometry_slot_;     // obstacles: depth: the pose for perception
+  std::unique_ptr<OdometryTap> odometry_tap_;       // ... published by the base thread
+  std::unique_ptr<DepthSensor> depth_;              // obstacles: depth
   std::unique_ptr<Channels> channels_;
   std::unique_ptr<ControlTask> task_;
   std::unique_ptr<BaseTask> base_task_;
@@ -99,8 +103,9 @@ void Daemon::createWorkspaces() {
 
   const rt::Nanos now = clock_.now();
   // The simulated world: the base with hal: sim; the movers (the simulated camera) with
-  // obstacles: sim (config.sim.movers_only with a real base).
-  if (config_.hal == "sim" || config_.obstacles == "sim") {
+  // obstacles: sim, or rendered with camera.backend: sim (config.sim.movers_only with a real
+  // base).
+  if (config_.hal == "sim" || config_.obstacles == "sim" || (config_.obstacles == "depth" && config_.camera.backend == "sim")) {
     try {
       sim_ = std::make_unique<hal::SimHal>(config_.map, config_.robot, config_.sim, now);
     } catch (const std::invalid_argument& e) {
@@ -115,7 +120,8 @@ void Daemon::createWorkspaces() {
     // at once (exit 3), not discovered as a stale robot later.
     try {
       can_base_ = std::make_unique<hal::SocketCanBase>(
-          hal::openCanTransport(config_.socketcan.interface, config_.socketcan.profile), config_.socketcan.profile);
+          hal::openCanTransport(config_.socketcan.interface, config_.socketcan.profile), config_.socketcan.profile,
+          Pose2{}, &clock_);  // the clock stamps each command frame's hand-over to the kernel
     } catch (const hal::CanTransportError& e) {
       // e.what() names the interface or the socket path, and why.
       std::string message = config_.file.string();
@@ -129,6 +135,24 @@ void Daemon::createWorkspaces() {
   hal::ObstacleSensor* obstacles = nullptr;
   if (config_.obstacles == "sim") {
     obstacles = &sim_->obstacles();
+  } else if (config_.obstacles == "depth") {
+    // The camera is opened here, like the bus: no device is exit 3 at once. The base is
+    // wrapped so that the perception thread gets the robot's pose (depth_sensor.hpp).
+    odometry_slot_ = std::make_unique<OdometrySlot>();
+    odometry_tap_ = std::make_unique<OdometryTap>(*base, *odometry_slot_);
+    base = odometry_tap_.get();
+    try {
+      depth_ = makeDepthSensor(config_, sim_.get(), *odometry_slot_);
+    } catch (const DepthCameraError& e) {
+      std::string message = config_.file.string();
+      message.append(": camera.backend: ").append(e.what());
+      throw DeviceError(message);
+    } catch (const std::invalid_argument& e) {
+      std::string message = config_.file.string();
+      message.append(": camera: ").append(e.what());
+      throw ConfigError(message);
+    }
+    obstacles = depth_.get();
   } else {
     no_obstacles_ = std::make_unique<NoObstacles>();
     obstacles = no_obstacles_.get();
@@ -155,6 +179,7 @@ void Daemon::startPeriodic(Worker& worker, const rt::ThreadSpec& spec, rt::Nanos
     // Set-up (allocates: the loop's histograms), then real-time from here on.
     rt::PeriodicLoop& loop = worker.loop.emplace(clock_, period, clock_.now() + period);
     if (&worker == &control_) task_->attachLoop(&loop);
+    if (&worker == &base_) base_task_->attachLoop(&loop);
     rt::markRealtimeThread(true);
     worker.started.store(true, std::memory_order_release);
     while (running_.load(std::memory_order_acquire)) {
@@ -264,6 +289,10 @@ int Daemon::run() {
   startThreads();
   rt::resetRealtimeAllocations();
   service_->setControlTiming(&control_.loop->execution(), &control_.loop->wakeLatency(), control_.thread.realtime());
+  if (base_.started.load(std::memory_order_acquire)) {
+    service_->setBaseTiming(base_task_.get(), &base_.loop->execution(), &base_.loop->wakeLatency(),
+                            base_.thread.realtime());
+  }
   service_->ready(clock_.now());
   {
     std::string hal = config_.hal;

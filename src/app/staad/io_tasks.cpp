@@ -23,7 +23,56 @@ void BaseTask::log(rt::Nanos now, rt::LogLevel level, const char* message, doubl
   rt::pushLog(ch_.base_log, now, level, message, a, b, c, count);  // a full ring drops (and counts) it
 }
 
+namespace {
+
+// One writer: a relaxed store is enough (readers need each value untorn, not ordered).
+void put(std::atomic<std::uint64_t>& a, std::uint64_t value) { a.store(value, std::memory_order_relaxed); }
+std::uint64_t get(const std::atomic<std::uint64_t>& a) { return a.load(std::memory_order_relaxed); }
+
+}  // namespace
+
+rt::PeriodicCounters BaseTask::loopCounters() const {
+  rt::PeriodicCounters c;
+  c.cycles = get(shared_.cycles);
+  c.overruns = get(shared_.overruns);
+  c.execution_overruns = get(shared_.execution_overruns);
+  c.late_wakeups = get(shared_.late_wakeups);
+  c.preempted = get(shared_.preempted);
+  c.skipped_periods = get(shared_.skipped_periods);
+  c.sleep_errors = get(shared_.sleep_errors);
+  return c;
+}
+
+void BaseTask::publishLoopCounters() {
+  const rt::PeriodicCounters& c = loop_->counters();
+  put(shared_.cycles, c.cycles);
+  put(shared_.overruns, c.overruns);
+  put(shared_.execution_overruns, c.execution_overruns);
+  put(shared_.late_wakeups, c.late_wakeups);
+  put(shared_.preempted, c.preempted);
+  put(shared_.skipped_periods, c.skipped_periods);
+  put(shared_.sleep_errors, c.sleep_errors);
+}
+
+void BaseTask::trackCommand(rt::Nanos stamp) {
+  if (stamp <= seen_stamp_) return;
+  if (seen_stamp_ >= 0 && seen_stamp_ > wire_stamp_) put(unsent_, get(unsent_) + 1);
+  seen_stamp_ = stamp;
+}
+
+void BaseTask::recordWire(rt::Nanos stamp) {
+  const hal::CommandSent sent = base_.lastCommandSent();
+  // Only a frame sent by this write() carries this command; a stamp already measured went out
+  // before (the driver repeats the latest command at its rate).
+  if (stamp < 0 || sent.command_stamp != stamp || stamp <= wire_stamp_ || sent.sent_at < 0) return;
+  wire_.record(sent.sent_at - stamp);
+  wire_stamp_ = stamp;
+}
+
 void BaseTask::cycle(rt::Nanos now) {
+  // The loop's counters as of the last cycle's end, for the service thread's status.
+  if (loop_ != nullptr) publishLoopCounters();
+
   // Pose corrections first, so that this period's odometry already reflects them.
   Pose2 pose;
   while (ch_.poses.pop(pose)) {
@@ -44,6 +93,7 @@ void BaseTask::cycle(rt::Nanos now) {
   ch_.command.update();
   const CommandSlot& slot = ch_.command.readBuffer();
   const rt::Nanos stamp = slot.command.stamp;
+  trackCommand(stamp);
   CommandSource source = CommandSource::kBrake;
   hal::VelocityCommand command = brakeCommand(now);
   if (stamp >= 0 && now - stamp < fresh_limit_) {
@@ -75,6 +125,7 @@ void BaseTask::cycle(rt::Nanos now) {
   source_ = source;
   last_ = command;
   base_.write(now, command);
+  if (source != CommandSource::kBrake) recordWire(command.stamp);
 }
 
 void BaseTask::brake(rt::Nanos now) {

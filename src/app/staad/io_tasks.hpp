@@ -9,6 +9,13 @@
 // wake-up and published when the cycle ends (up to a period later): while the control thread
 // keeps its deadlines, every command is replaced before it is 2 periods old.
 //
+// Command-to-wire latency: from a control command's stamp (its cycle's wake-up) to the moment
+// the base driver handed the first frame carrying it to the kernel (hal::Base::lastCommandSent),
+// one sample per command, into a histogram the service thread reads. Its own brakes (no fresh
+// command) are the base thread's, not the control thread's: not measured. A control command
+// replaced before any frame carried it is counted as unsent. attachLoop() gives the task its
+// thread's PeriodicLoop, whose counters it copies into atomics every cycle for the status.
+//
 // PerceptionTask (perception_hz): a new obstacle frame from the sensor is published (not
 // while a test stalls it: Channels::debug_stall_obstacles, the frame is read and dropped).
 //
@@ -20,7 +27,10 @@
 #include "app/staad/channels.hpp"
 #include "hal/base.hpp"
 #include "hal/obstacles.hpp"
+#include "rt/periodic.hpp"
+#include "rt/timing_stats.hpp"
 
+#include <atomic>
 #include <cstdint>
 
 namespace staa::staad {
@@ -35,10 +45,14 @@ const char* toString(CommandSource source);
 class BaseTask {
  public:
   BaseTask(hal::Base& base, Channels& channels, rt::Nanos control_period);
+  BaseTask(const BaseTask&) = delete;
+  BaseTask& operator=(const BaseTask&) = delete;
 
   void cycle(rt::Nanos now);
   // The base thread's last words: a brake (the daemon is stopping).
   void brake(rt::Nanos now);
+  // The loop that runs cycle() (from the base thread, before its first cycle).
+  void attachLoop(const rt::PeriodicLoop* loop) { loop_ = loop; }
 
   CommandSource source() const { return source_; }
   const hal::VelocityCommand& lastCommand() const { return last_; }
@@ -46,7 +60,27 @@ class BaseTask {
   std::uint64_t brakes() const { return brakes_; }        // periods braked for lack of commands
   std::uint64_t posesRefused() const { return poses_refused_; }
 
+  // Any thread: the command-to-wire histogram (relaxed atomics), the control commands never
+  // sent, and the attached loop's counters as of the last cycle's start.
+  const rt::LatencyHistogram& commandToWire() const { return wire_; }
+  std::uint64_t commandsUnsent() const { return unsent_.load(std::memory_order_relaxed); }
+  rt::PeriodicCounters loopCounters() const;
+
  private:
+  // The PeriodicCounters, one relaxed atomic each (one writer: the base thread).
+  struct SharedCounters {
+    std::atomic<std::uint64_t> cycles{0}, overruns{0}, execution_overruns{0}, late_wakeups{0}, preempted{0},
+        skipped_periods{0}, sleep_errors{0};
+  };
+
+  void publishLoopCounters();
+  // A control command stamp read from the slot: a newer one retires the previous, counted
+  // as unsent when no frame carried it.
+  void trackCommand(rt::Nanos stamp);
+  // After write() of the control thread's command (or its plan's next action) stamped
+  // `stamp`: the first frame that carried it is measured.
+  void recordWire(rt::Nanos stamp);
+
   void log(rt::Nanos now, rt::LogLevel level, const char* message, double a = 0.0, double b = 0.0, double c = 0.0,
            std::uint8_t count = 0);
 
@@ -60,6 +94,12 @@ class BaseTask {
   std::uint64_t fallbacks_ = 0;
   std::uint64_t brakes_ = 0;
   std::uint64_t poses_refused_ = 0;
+  const rt::PeriodicLoop* loop_ = nullptr;
+  SharedCounters shared_;
+  rt::LatencyHistogram wire_;  // command-to-wire, 1 us bins up to 100 ms (beyond: overflow, exact max)
+  rt::Nanos seen_stamp_ = -1;  // the newest control command stamp read
+  rt::Nanos wire_stamp_ = -1;  // the newest one measured on the wire
+  std::atomic<std::uint64_t> unsent_{0};
 };
 
 class PerceptionTask {

@@ -1,5 +1,6 @@
 #include "app/staad/service.hpp"
 
+#include "app/staad/io_tasks.hpp"
 #include "app/staad/protocol.hpp"
 #include "rt/alloc_count.hpp"
 
@@ -55,6 +56,32 @@ const char* levelName(rt::LogLevel level) {
     case rt::LogLevel::kError: return "error";
   }
   return "?";
+}
+
+// The status reply: the contract's object (statusJson) plus the base I/O path's timing,
+// which the service fills in status(): `threads.base` in the shape of the control thread's
+// `cycle`, `wake` and overrun counts, and `base.command_to_wire`.
+std::string fullStatusReply(const Status& s, std::uint64_t rt_allocations) {
+  using Json = nlohmann::json;
+  Json status = statusJson(s, rt_allocations);
+  const ThreadTiming& t = s.base_thread;
+  status["threads"]["base"] = {
+      {"cycle",
+       {{"p50_us", t.exec_p50_us}, {"p99_us", t.exec_p99_us}, {"max_us", t.exec_max_us}, {"overruns", t.overruns},
+        {"count", t.cycles}}},
+      {"wake", {{"p50_us", t.wake_p50_us}, {"p99_us", t.wake_p99_us}, {"max_us", t.wake_max_us}}},
+      {"execution_overruns", t.execution_overruns},
+      {"late_wakeups", t.late_wakeups},
+      {"preempted", t.preempted},
+      {"skipped_periods", t.skipped_periods},
+      {"realtime", t.realtime}};
+  const CommandToWire& w = s.command_to_wire;
+  status["base"]["command_to_wire"] = {
+      {"p50_us", w.p50_us}, {"p99_us", w.p99_us}, {"max_us", w.max_us}, {"count", w.count}, {"unsent", w.unsent}};
+  Json reply;
+  reply["ok"] = true;
+  reply["status"] = std::move(status);
+  return reply.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace
@@ -188,6 +215,14 @@ void Service::setControlTiming(const rt::LatencyHistogram* execution, const rt::
   realtime_ = realtime;
 }
 
+void Service::setBaseTiming(const BaseTask* task, const rt::LatencyHistogram* execution,
+                            const rt::LatencyHistogram* wake, bool realtime) {
+  base_task_ = task;
+  base_exec_hist_ = execution;
+  base_wake_hist_ = wake;
+  base_realtime_ = realtime;
+}
+
 const Status& Service::latest() {
   if (ch_.status.update()) {
     status_ = ch_.status.readBuffer();
@@ -211,6 +246,36 @@ const Status& Service::status() {
     status_.wake_p50_us = w.p50_us;
     status_.wake_p99_us = w.p99_us;
     status_.wake_max_us = w.max_us;
+  }
+  ThreadTiming& bt = status_.base_thread;
+  bt.realtime = base_realtime_;
+  if (base_exec_hist_ != nullptr) {
+    const rt::TimingSummary e = base_exec_hist_->summary();
+    bt.exec_p50_us = e.p50_us;
+    bt.exec_p99_us = e.p99_us;
+    bt.exec_max_us = e.max_us;
+  }
+  if (base_wake_hist_ != nullptr) {
+    const rt::TimingSummary w = base_wake_hist_->summary();
+    bt.wake_p50_us = w.p50_us;
+    bt.wake_p99_us = w.p99_us;
+    bt.wake_max_us = w.max_us;
+  }
+  if (base_task_ != nullptr) {
+    const rt::PeriodicCounters c = base_task_->loopCounters();
+    bt.cycles = c.cycles;
+    bt.overruns = c.overruns;
+    bt.execution_overruns = c.execution_overruns;
+    bt.late_wakeups = c.late_wakeups;
+    bt.preempted = c.preempted;
+    bt.skipped_periods = c.skipped_periods;
+    const rt::TimingSummary t = base_task_->commandToWire().summary();
+    CommandToWire& cw = status_.command_to_wire;
+    cw.count = t.count;
+    cw.unsent = base_task_->commandsUnsent();
+    cw.p50_us = t.p50_us;
+    cw.p99_us = t.p99_us;
+    cw.max_us = t.max_us;
   }
   return status_;
 }
@@ -359,7 +424,7 @@ void Service::handleLine(Client& c, std::string_view line) {
   }
   const Request& request = std::get<Request>(parsed);
   if (request.kind == RequestKind::kStatus) {
-    c.out.append(statusReply(status(), rt::realtimeAllocations()));
+    c.out.append(fullStatusReply(status(), rt::realtimeAllocations()));
     return;
   }
   if (request.kind == RequestKind::kDebug) {

@@ -35,6 +35,8 @@ struct pollfd;  // <poll.h>, kept out of this header
 
 namespace staa::staad {
 
+class BaseTask;
+
 // A failure to start the service (socket busy, path unusable): staad exits 1.
 class ServiceError : public std::runtime_error {
  public:
@@ -71,6 +73,10 @@ class Service {
   // The control thread's timing (its periodic loop's histograms, read through their atomics)
   // and whether it runs under SCHED_FIFO: they complete the status.
   void setControlTiming(const rt::LatencyHistogram* execution, const rt::LatencyHistogram* wake, bool realtime);
+  // The same for the base thread, and its task (the loop's counters and the command-to-wire
+  // latency, read through their atomics): `threads.base` and `base.command_to_wire`.
+  void setBaseTiming(const BaseTask* task, const rt::LatencyHistogram* execution, const rt::LatencyHistogram* wake,
+                     bool realtime);
 
   // READY=1 (and the first STATUS=); starts the watchdog pings.
   void ready(rt::Nanos now);
@@ -138,6 +144,10 @@ class Service {
   const rt::LatencyHistogram* exec_hist_ = nullptr;
   const rt::LatencyHistogram* wake_hist_ = nullptr;
   bool realtime_ = false;
+  const BaseTask* base_task_ = nullptr;
+  const rt::LatencyHistogram* base_exec_hist_ = nullptr;
+  const rt::LatencyHistogram* base_wake_hist_ = nullptr;
+  bool base_realtime_ = false;
   bool ready_ = false;
   bool terminate_ = false;
   // sd_notify

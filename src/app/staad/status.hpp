@@ -23,6 +23,24 @@ enum class FaultKind : std::uint8_t {
 };
 const char* toString(FaultKind fault);  // "none", "stale_odometry", "stale_obstacles", "base"
 
+// A periodic real-time thread's timing beyond the control thread's (whose fields are in
+// Status itself, for the contract's `cycle`), microseconds.
+struct ThreadTiming {
+  std::uint64_t cycles = 0;
+  double exec_p50_us = 0.0, exec_p99_us = 0.0, exec_max_us = 0.0;  // execution of a cycle
+  double wake_p50_us = 0.0, wake_p99_us = 0.0, wake_max_us = 0.0;  // wake-up latency
+  std::uint64_t overruns = 0, execution_overruns = 0, late_wakeups = 0, preempted = 0, skipped_periods = 0;
+  bool realtime = false;  // runs under SCHED_FIFO
+};
+
+// From a control command's stamp to the base driver's hand-over of the first frame carrying
+// it to the kernel (BaseTask), microseconds.
+struct CommandToWire {
+  std::uint64_t count = 0;   // commands measured (one sample each)
+  std::uint64_t unsent = 0;  // control commands replaced before any frame carried them
+  double p50_us = 0.0, p99_us = 0.0, max_us = 0.0;
+};
+
 struct Status {
   DaemonState state = DaemonState::kIdle;
   Pose2 pose;
@@ -47,6 +65,10 @@ struct Status {
   double wake_p50_us = 0.0, wake_p99_us = 0.0, wake_max_us = 0.0;
   std::uint64_t overruns = 0, execution_overruns = 0, late_wakeups = 0, skipped_periods = 0;
   std::uint64_t preempted = 0;  // overruns whose cycle used less than a period of CPU
+  // Set by the service thread (from the base thread's loop and BaseTask) when a status is
+  // asked for; the control thread leaves them 0.
+  ThreadTiming base_thread;
+  CommandToWire command_to_wire;
   // Input staleness: seconds since the newest odometry / obstacle frame (-1: never seen).
   double odometry_age_s = -1.0;
   double obstacles_age_s = -1.0;

@@ -535,6 +535,36 @@ TEST_F(SocketCanBaseTest, ABaseLoopOf10MsStillSendsThirtyCommandsASecond) {
   EXPECT_EQ(commands, 90);
 }
 
+TEST_F(SocketCanBaseTest, ANewCommandGoesOutAtTheNextWriteNotAtTheNextSendSlot) {
+  // The control thread's commands (30 Hz, each with its own stamp) seen by a 100 Hz base
+  // loop: each goes on the wire at the first write after it was made, within one base period.
+  constexpr rt::Nanos kControl = 33'333'333;
+  std::vector<rt::Nanos> delays;
+  int current = -1;
+  int sent = 0;
+  for (rt::Nanos t = 0; t < 3000 * kMs; t += 10 * kMs) {
+    if (t % (20 * kMs) == 0) {
+      ASSERT_TRUE(peer->healthy());
+      readAt(t);
+    }
+    const int k = static_cast<int>(t / kControl);  // the newest command at t
+    VelocityCommand c = drive(0.01 * (k % 50), 0.0);
+    c.stamp = k * kControl;
+    base->write(t, c);
+    for (const can_frame& f : peer->received()) {
+      if (f.can_id != profile.command.id) continue;
+      ++sent;
+      if (k != current) {
+        delays.push_back(t - c.stamp);
+        current = k;
+      }
+    }
+  }
+  ASSERT_EQ(delays.size(), 90u);  // every command of the 3 s went out
+  for (const rt::Nanos d : delays) EXPECT_LT(d, 10 * kMs);
+  EXPECT_LE(sent, 90 + 3);  // and nothing more than the commands (the odd repeat at most)
+}
+
 TEST_F(SocketCanBaseTest, BrakeAndStopGoOutAtOnce) {
   ASSERT_TRUE(peer->healthy());
   readAt(0);
