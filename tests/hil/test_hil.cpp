@@ -17,6 +17,7 @@
 // Every wait polls with a deadline; every process this test starts is killed in teardown.
 #include "shared_dir.hpp"
 
+#include "child_process.hpp"
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -44,7 +45,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
 
 namespace {
 
@@ -79,75 +79,7 @@ std::string readFile(const fs::path& p) {
   return ss.str();
 }
 
-// A child process, killed (SIGKILL) and reaped when this goes out of scope.
-class Child {
- public:
-  Child() = default;
-  Child(const std::vector<std::string>& argv, const fs::path& out, const fs::path& err) {
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> args;
-    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    // Without NOTIFY_SOCKET: staad must not talk to the systemd of whoever runs the tests.
-    std::vector<std::string> env;
-    for (char** e = environ; *e != nullptr; ++e) {
-      const std::string entry(*e);
-      if (entry.rfind("NOTIFY_SOCKET=", 0) != 0 && entry.rfind("WATCHDOG_", 0) != 0) env.push_back(entry);
-    }
-    std::vector<char*> envp;
-    for (std::string& e : env) envp.push_back(e.data());
-    envp.push_back(nullptr);
-    if (posix_spawn(&pid_, argv[0].c_str(), &fa, nullptr, args.data(), envp.data()) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  Child& operator=(Child&& o) noexcept {
-    kill();
-    pid_ = o.pid_;
-    status_ = o.status_;
-    reaped_ = o.reaped_;
-    o.pid_ = -1;
-    return *this;
-  }
-  ~Child() { kill(); }
-
-  pid_t pid() const { return pid_; }
-  bool alive() { return pid_ > 0 && !poll(); }
-  // The exit code within `timeout`, or nullopt (still running, or killed by a signal).
-  std::optional<int> wait(milliseconds timeout) {
-    const auto deadline = Clock::now() + timeout;
-    while (!poll()) {
-      if (Clock::now() >= deadline) return std::nullopt;
-      std::this_thread::sleep_for(milliseconds(5));
-    }
-    if (WIFEXITED(status_)) return WEXITSTATUS(status_);
-    return std::nullopt;
-  }
-  void signal(int sig) {
-    if (pid_ > 0 && !reaped_) ::kill(pid_, sig);
-  }
-  void kill() {
-    if (pid_ <= 0 || reaped_) return;
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, &status_, 0);
-    reaped_ = true;
-  }
-
- private:
-  bool poll() {
-    if (reaped_ || pid_ <= 0) return true;
-    if (::waitpid(pid_, &status_, WNOHANG) == pid_) reaped_ = true;
-    return reaped_;
-  }
-  pid_t pid_ = -1;
-  int status_ = 0;
-  bool reaped_ = false;
-};
+using staa::test::Child;
 
 // One line-delimited JSON connection (staad's control socket, basesim's control socket).
 class LineClient {

@@ -33,9 +33,24 @@ inline std::vector<std::string> environmentWithout(const std::vector<std::string
   return env;
 }
 
+// The environment for a daemon under test: this process's, without NOTIFY_SOCKET and
+// WATCHDOG_* (staad must not talk to the systemd of whoever runs the tests), with `extra`
+// ("NAME=value") added, replacing NAME.
+inline std::vector<std::string> daemonEnvironment(const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> drop{"NOTIFY_SOCKET=", "WATCHDOG_"};
+  for (const std::string& x : extra) drop.push_back(x.substr(0, x.find('=') + 1));
+  std::vector<std::string> env = environmentWithout(drop);
+  env.insert(env.end(), extra.begin(), extra.end());
+  return env;
+}
+
 class Child {
  public:
   Child() = default;
+  // With daemonEnvironment(extra_env).
+  Child(const std::vector<std::string>& argv, const std::filesystem::path& out, const std::filesystem::path& err,
+        const std::vector<std::string>& extra_env = {})
+      : Child(argv, daemonEnvironment(extra_env), out, err) {}
   Child(const std::vector<std::string>& argv, const std::vector<std::string>& env, const std::filesystem::path& out,
         const std::filesystem::path& err) {
     posix_spawn_file_actions_t fa;
@@ -69,6 +84,7 @@ class Child {
   ~Child() { kill(); }
 
   pid_t pid() const { return pid_; }
+  bool started() const { return pid_ > 0; }
   bool alive() { return pid_ > 0 && !reaped_ && !poll(); }
   // Waits up to `timeout` for the exit; the exit code, or nullopt (still running, or killed
   // by a signal).

@@ -19,6 +19,7 @@
 #include "shared_dir.hpp"
 
 #include <gmock/gmock.h>
+#include "child_process.hpp"
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -44,7 +45,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
 
 namespace staa::staad {
 namespace {
@@ -643,67 +643,7 @@ TEST(DepthSensor, WalkersElsewhereInTheOfficeAreReportedAsWell) {
 
 // ---- the staad binary ----
 
-// A child process, killed and reaped when this goes out of scope.
-class Child {
- public:
-  // `extra_env`: entries added to this process's environment ("NAME=value", replacing NAME).
-  Child(const std::vector<std::string>& argv, const fs::path& out, const fs::path& err,
-        const std::vector<std::string>& extra_env = {}) {
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> args;
-    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    // No NOTIFY_SOCKET: the test's own environment may carry one.
-    std::vector<std::string> env;
-    for (char** e = environ; *e != nullptr; ++e) {
-      const std::string entry(*e);
-      bool keep = entry.rfind("NOTIFY_SOCKET=", 0) != 0 && entry.rfind("WATCHDOG_", 0) != 0;
-      for (const std::string& x : extra_env) keep = keep && entry.rfind(x.substr(0, x.find('=') + 1), 0) != 0;
-      if (keep) env.push_back(entry);
-    }
-    env.insert(env.end(), extra_env.begin(), extra_env.end());
-    std::vector<char*> envp;
-    for (std::string& e : env) envp.push_back(e.data());
-    envp.push_back(nullptr);
-    if (posix_spawn(&pid_, argv[0].c_str(), &fa, nullptr, args.data(), envp.data()) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  ~Child() {
-    if (pid_ > 0 && !reaped_) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, &status_, 0);
-    }
-  }
-
-  bool started() const { return pid_ > 0; }
-  // The exit code, or nullopt when it did not exit within `timeout` (or was killed).
-  std::optional<int> wait(std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (!reaped_) {
-      if (::waitpid(pid_, &status_, WNOHANG) == pid_) {
-        reaped_ = true;
-        break;
-      }
-      if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    return WIFEXITED(status_) ? std::optional<int>(WEXITSTATUS(status_)) : std::nullopt;
-  }
-  void signal(int sig) {
-    if (pid_ > 0 && !reaped_) ::kill(pid_, sig);
-  }
-
- private:
-  pid_t pid_ = -1;
-  int status_ = 0;
-  bool reaped_ = false;
-};
+using staa::test::Child;
 
 class StaadDepth : public ::testing::Test {
  protected:
