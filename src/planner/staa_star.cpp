@@ -45,6 +45,8 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
       braking_obstacles_(64) {
   braking_obstacles_.setBraking(config_.obstacle_reaction_s, config_.obstacle_brake_decel);
   root_ok_.assign(actions_.size(), 1);
+  root_clear_.assign(actions_.size(), 0.0);
+  root_allowed_.assign(actions_.size(), 1);
   nodes_.reserve(config_.max_nodes);
   queue_.reserve(config_.max_nodes);
   trajectory_.reserve(config_.max_nodes > 1024 ? 1024 : config_.max_nodes);
@@ -94,19 +96,21 @@ std::int32_t StaaStar::pop() {
   return n;
 }
 
-bool StaaStar::brakeFree(const UnicycleState& from, double t0, const DynamicObstacleSet& obstacles, bool stand) const {
+double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const DynamicObstacleSet& obstacles,
+                                bool stand, double deviation_accel) const {
+  constexpr double kClear = std::numeric_limits<double>::infinity();
   const double step = config_.brake_step_s;
   UnicycleState s = from;
   double t = t0;
   for (int k = 0; k < 64 && (std::abs(s.v) > 1e-3 || std::abs(s.w) > 1e-3); ++k) {
     const ArcVelocities vel = arcVelocities(s, brakeAction(s, limits_, step), step, limits_);
-    if (!collision_.motionFreeStatic(s, vel, step)) return false;
-    if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t)) return false;
+    if (!collision_.motionFreeStatic(s, vel, step)) return t;
+    if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t, deviation_accel)) return t;
     const Pose2 p = poseAlongArc(s, vel.v_mid, vel.w_mid, step);
     s = UnicycleState{p.x, p.y, p.theta, vel.v_end, vel.w_end};
     t += step;
   }
-  if (!stand || obstacles.size() == 0) return true;
+  if (!stand || obstacles.size() == 0) return kClear;
   // Standing there until the slowest obstacle has stopped too.
   double last_stop = t;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
@@ -115,28 +119,50 @@ bool StaaStar::brakeFree(const UnicycleState& from, double t0, const DynamicObst
       last_stop = std::max(last_stop, config_.obstacle_reaction_s + speed / config_.obstacle_brake_decel);
     }
   }
-  if (last_stop <= t) return true;
+  if (last_stop <= t) return kClear;
+  // In steps, so that a collision while standing has a time too.
   const ArcVelocities stand_still{0.0, 0.0, 0.0, 0.0};
-  return collision_.motionFreeDynamic(s, stand_still, last_stop - t, obstacles, t);
+  for (; t < last_stop; t += step) {
+    if (!collision_.motionFreeDynamic(s, stand_still, std::min(step, last_stop - t), obstacles, t, deviation_accel)) {
+      return t;
+    }
+  }
+  return kClear;
 }
 
 std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicObstacleSet& obstacles) {
   const double c0 = std::cos(start.theta), s0 = std::sin(start.theta);
   std::uint8_t best = 0;
+  double latest = -1.0;  // among tier-0 actions: the latest time a collision begins
   for (std::size_t a = 0; a < actions_.size(); ++a) {
     const ArcVelocities vel = arcVelocities(start, actions_[a], config_.dt, limits_);
     const double c = std::cos(vel.w_mid * config_.dt), sn = std::sin(vel.w_mid * config_.dt);
     const ArcMotion motion = makeArcMotion(start, c0, s0, vel.v_mid, vel.w_mid, config_.dt, c, sn);
     const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, vel.w_end};
     std::uint8_t tier = 0;
-    if (collision_.motionFreeStatic(motion) && collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0) &&
-        brakeFree(child, config_.dt, braking_obstacles_, true)) {
-      tier = 1;
-      // Passive safety: the same stop against the obstacles at constant velocity.
-      if (config_.passive_safety && (obstacles.size() == 0 || brakeFree(child, config_.dt, obstacles, false))) tier = 2;
+    double clear = 0.0;  // the action itself collides
+    if (collision_.motionFreeStatic(motion) && collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0)) {
+      clear = brakeClearTime(child, config_.dt, braking_obstacles_, true, 0.0);
+      if (std::isinf(clear)) {
+        tier = 1;
+        // Passive safety: the same stop against the obstacles at constant velocity.
+        if (config_.passive_safety && (obstacles.size() == 0 || std::isinf(brakeClearTime(child, config_.dt, obstacles, false,
+                                                                                 config_.obstacle_deviation_accel)))) {
+          tier = 2;
+        }
+      }
     }
     root_ok_[a] = tier;
+    root_clear_[a] = clear;
     best = std::max(best, tier);
+    if (tier == 0) latest = std::max(latest, clear);
+  }
+  // The allowed first actions: those of the best tier; when none passes, the least bad ones,
+  // after which a braking robot would be hit latest (a robot that cannot stop in time any
+  // more slows down or turns away rather than keep its speed: two agents that each went on
+  // at full speed once no action was safe met head-on; docs/results.md).
+  for (std::size_t a = 0; a < actions_.size(); ++a) {
+    root_allowed_[a] = best > 0 ? root_ok_[a] == best : root_clear_[a] >= latest;
   }
   return best;
 }
@@ -145,13 +171,12 @@ Action StaaStar::safeStop(const UnicycleState& start, const LocalMap& map, const
   map_ = &map;
   collision_.prepare(map);
   braking_obstacles_.copyFrom(obstacles);
-  const std::uint8_t tier = markBrakeSafe(start, obstacles);
-  if (tier == 0) return brakeAction(start, limits_, config_.dt);
+  markBrakeSafe(start, obstacles);
   // The allowed action that leaves the least speed (both velocities relative to their limits).
   double best_cost = 0.0;
   std::size_t best = actions_.size();
   for (std::size_t a = 0; a < actions_.size(); ++a) {
-    if (root_ok_[a] < tier) continue;
+    if (!root_allowed_[a]) continue;
     const ArcVelocities vel = arcVelocities(start, actions_[a], config_.dt, limits_);
     const double cost = std::abs(vel.v_end) / std::max(limits_.v_max, -limits_.v_min) + std::abs(vel.w_end) / limits_.w_max;
     if (best == actions_.size() || cost < best_cost) {
@@ -195,17 +220,15 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   result.outcome = PlanResult::Outcome::kExhausted;
 
   // Braking safety of the first actions (see StaaConfig::brake_safety): only the actions of
-  // the strictest tier that any action reaches are allowed; all when none passes.
-  std::uint8_t root_tier = 0;
+  // the strictest tier that any action reaches are allowed; the least bad ones when none passes.
   if (config_.brake_safety) {
     braking_obstacles_.copyFrom(obstacles);
-    root_tier = markBrakeSafe(start, obstacles);
+    result.brake_safety_tier = markBrakeSafe(start, obstacles);
     std::size_t allowed = 0;
-    for (std::size_t a = 0; a < actions_.size(); ++a) allowed += root_ok_[a] >= root_tier ? 1 : 0;
-    result.brake_safe_actions = root_tier > 0 ? static_cast<std::uint32_t>(allowed) : 0;
-    result.brake_safety_tier = root_tier;
+    for (std::size_t a = 0; a < actions_.size(); ++a) allowed += root_allowed_[a] ? 1 : 0;
+    result.brake_safe_actions = static_cast<std::uint32_t>(allowed);
   }
-  const bool restrict_root = root_tier > 0;
+  const bool restrict_root = config_.brake_safety;
 
   while (!queue_.empty()) {
     // Checked on every pop (paper, Sec. III-E-6).
@@ -264,7 +287,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     }
     for (std::size_t a = 0; a < actions_.size(); ++a) {
       ++st.successors;
-      if (restrict_root && id == 0 && root_ok_[a] < root_tier) {
+      if (restrict_root && id == 0 && !root_allowed_[a]) {
         ++st.collisions;  // could not brake safely after it
         continue;
       }

@@ -52,8 +52,8 @@ struct StaaConfig {
   // when the robot can brake to a stop after it without touching the map or the moving
   // obstacles predicted under the braking hypothesis (each keeps its velocity for
   // obstacle_reaction_s, then brakes at obstacle_brake_decel: what another robot, or a person,
-  // does when it sees us). When no first action passes, all are allowed and the search decides
-  // (braking alone would not help: something that does not brake reaches the robot anyway).
+  // does when it sees us). When no first action passes, the least bad ones are allowed: those after which braking
+  // meets something latest (slowing down or turning away; what a person does too).
   bool brake_safety = true;
   // A stricter tier of the same rule, preferred whenever some first action passes it: the
   // robot can brake to a stop after the action before any moving obstacle, kept at constant
@@ -64,6 +64,11 @@ struct StaaConfig {
   bool passive_safety = true;
   double obstacle_reaction_s = 0.3;
   double obstacle_brake_decel = 2.0;  // m/s^2
+  // Both braking checks grow every obstacle's prediction by 0.5 * a * t^2 at time t: the room
+  // an obstacle that turns or changes speed at up to this acceleration (m/s^2) needs beyond
+  // the straight line. 0: the straight line only (two agents turning towards each other
+  // were each predicted to pass the other until neither could stop: docs/results.md).
+  double obstacle_deviation_accel = 0.0;
   double brake_step_s = 0.15;         // the braking manoeuvre is checked in steps of this
 };
 
@@ -89,7 +94,7 @@ struct PlanResult {
   Action first_action;        // to apply until the next cycle
   UnicycleState best;         // the state the plan leads to
   double best_h = 0.0;
-  std::uint32_t brake_safe_actions = 0;  // first actions allowed by the braking check
+  std::uint32_t brake_safe_actions = 0;  // first actions allowed by the braking check (at tier 0: the least bad)
   std::uint8_t brake_safety_tier = 0;    // 2: passive safety, 1: braking hypothesis, 0: none passed
   int depth = 0;              // depth of that state
   PlanStats stats;
@@ -147,12 +152,16 @@ class StaaStar {
   };
 
   bool closedIndex(double x, double y, double theta, std::size_t& index) const;
-  // Whether braking at the limits from `s` (at time t0) to a stop, and standing there until
-  // every obstacle has stopped, stays free of the map and of braking_obstacles_.
-  // With `stand` false only the braking is checked, against `obstacles` as they are given.
-  bool brakeFree(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand) const;
-  // Fills root_ok_ with each first action's tier (0..2) from `start`; returns the best tier
-  // any action reached (braking_obstacles_ must hold this cycle's copy).
+  // Braking at the limits from `s` (at time t0) to a stop, and standing there until every
+  // obstacle has stopped: +infinity when it stays free of the map and of `obstacles`, else the
+  // time (from the plan's start, to a brake step) at which it first touches something.
+  // With `stand` false only the braking is checked.
+  // Each obstacle's prediction is grown by 0.5 * deviation_accel * t^2 (CollisionChecker).
+  double brakeClearTime(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand,
+                        double deviation_accel) const;
+  // Fills root_ok_ with each first action's tier (0..2) from `start`, root_clear_ and
+  // root_allowed_ (the best tier's actions, or the least bad ones); returns the best tier any
+  // action reached (braking_obstacles_ must hold this cycle's copy).
   std::uint8_t markBrakeSafe(const UnicycleState& start, const DynamicObstacleSet& obstacles);
   void push(std::int32_t node);
   std::int32_t pop();
@@ -179,6 +188,8 @@ class StaaStar {
   // allocation) and which first actions passed.
   DynamicObstacleSet braking_obstacles_;
   std::vector<std::uint8_t> root_ok_;
+  std::vector<double> root_clear_;           // brakeClearTime after each first action (0: it collides itself)
+  std::vector<std::uint8_t> root_allowed_;   // the first actions the search may take
   bool timing_ = false;
 };
 

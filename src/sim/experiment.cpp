@@ -297,6 +297,7 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
                             {"distance_m", a.distance_m}});
     }
     j["agent_results"] = std::move(agents);
+    j["contacts"] = contactsJson(m.contacts);
     jruns.push_back(std::move(j));
   }
 

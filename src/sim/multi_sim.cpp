@@ -77,6 +77,8 @@ struct SimAgent {
   Vec2 goal{0.0, 0.0};
   bool counting = true;                         // false once no goal is left to drive to
   AgentResult result;
+  double last_speed = 0.0;  // |v| when this cycle's command was decided
+  int last_tier = -1;       // this cycle's STAA* braking-safety tier (-1: none)
 
   explicit SimAgent(std::size_t capacity) : seen(capacity) {}
 };
@@ -235,6 +237,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   std::vector<Vec2> velocities(n);
   std::vector<AgentCommand> commands(n);
   std::vector<Vec2> current_goals(options.on_step_goals ? n : 0);
+  std::vector<int> episodes_before(n, 0);
 
   MultiSimResult result;
   const double period = 1.0 / options.rate_hz;
@@ -268,6 +271,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
                                        : PlannerBudget::wallClock(static_cast<std::int64_t>(options.budget_ms * 1e6));
       const CycleOutput out = a.cycle->step(in, budget);
       commands[i] = AgentCommand{out.v_cmd, out.w_cmd};
+      a.last_speed = std::abs(rs.v);
+      a.last_tier = out.planned && a.evaluated && !a.controller ? out.plan.brake_safety_tier : -1;
+      if (options.on_cycle) options.on_cycle(i, out);
       if (a.evaluated && out.planned) {
         ++result.calls;
         pops.push_back(out.plan.stats.pops);
@@ -277,7 +283,23 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
         plan_us.push_back(static_cast<double>(out.plan_ns) * 1e-3);
       }
     }
+    for (std::size_t i = 0; i < n; ++i) episodes_before[i] = world.collisionEpisodes(i);
     world.step(period, commands);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (world.collisionEpisodes(i) == episodes_before[i]) continue;
+      if (options.mode == SimMode::kGhost && i != 0) continue;  // only counted agents
+      ContactRecord c;
+      c.time_s = world.time();
+      c.agent = static_cast<int>(i);
+      c.other = world.touchedLastStep(i);
+      c.speed = agents[i]->last_speed;
+      c.tier = agents[i]->last_tier;
+      if (c.other >= 0) {
+        c.other_speed = agents[static_cast<std::size_t>(c.other)]->last_speed;
+        c.other_tier = agents[static_cast<std::size_t>(c.other)]->last_tier;
+      }
+      result.contacts.push_back(c);
+    }
 
     // Goals passed within the radius count; the agent gets its next one.
     for (std::size_t i = 0; i < n; ++i) {

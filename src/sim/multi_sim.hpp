@@ -63,6 +63,22 @@ struct MultiSimOptions {
   // As on_step, with the goal each agent drives to now (one per agent; an agent with nowhere
   // left to go keeps its last goal) and the cycle index (0 for the first step); may be empty.
   std::function<void(const MultiWorld& world, std::span<const Vec2> current_goals, int cycle)> on_step_goals;
+  // Called after every agent's control cycle with what it decided (diagnostics); may be empty.
+  std::function<void(std::size_t agent, const CycleOutput& out)> on_cycle;
+};
+
+// One counted contact episode, as it began: who touched what, how fast both were going in
+// the step before, and the braking-safety tier of the first action each one's STAA* chose in
+// that step's cycle (2 passive, 1 braking hypothesis, 0 none passed; -1: not STAA*, or no plan
+// was made). Tells a robot driving into another apart from one being driven into.
+struct ContactRecord {
+  double time_s = 0.0;
+  int agent = 0;
+  int other = -1;  // the other agent's index, or -1 for the map
+  double speed = 0.0;        // |v| of `agent` before the step, m/s
+  double other_speed = 0.0;  // |v| of the other agent before the step (0 for the map)
+  int tier = -1;
+  int other_tier = -1;
 };
 
 struct AgentResult {
@@ -84,6 +100,7 @@ struct MultiSimResult {
   double finished_early_ratio = 0.0;
   double depth_mean = 0.0;
   Distribution plan_us;
+  std::vector<ContactRecord> contacts;  // the counted contact episodes, in time order
 };
 
 // Runs the agents on `map` (which must have goals). Throws std::invalid_argument for bad

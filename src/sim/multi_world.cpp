@@ -195,7 +195,11 @@ void MultiWorld::moveSolid(std::size_t i, double dt) {
     agents_near_.push_back(j);
     const bool overlapped = polygonsOverlap(a.footprint, agents_[j].footprint);
     start_agent_.push_back(overlapped);
-    if (overlapped) agents_[j].hit = true;
+    if (overlapped) {
+      agents_[j].hit = true;
+      agents_[j].touched = static_cast<int>(i);
+      a.touched = static_cast<int>(j);
+    }
   }
   start_bounds_ = false;
   if (map_.bounds) {
@@ -245,7 +249,13 @@ void MultiWorld::moveSolid(std::size_t i, double dt) {
     a.state.v = 0.0;
     a.state.w = 0.0;
     a.hit = true;
-    if (contact.kind == Contact::Kind::kAgent) agents_[contact.index].hit = true;
+    // A new contact names what was hit; sinking deeper into what it overlapped at the start
+    // keeps the name found then.
+    if (contact) a.touched = contact.kind == Contact::Kind::kAgent ? static_cast<int>(contact.index) : -1;
+    if (contact.kind == Contact::Kind::kAgent) {
+      agents_[contact.index].hit = true;
+      agents_[contact.index].touched = static_cast<int>(i);
+    }
   } else {
     a.state.pose = integrateArc(from, v, w, dt);
     a.distance += std::abs(v) * dt;
@@ -295,6 +305,7 @@ void MultiWorld::step(double dt, std::span<const AgentCommand> commands) {
     s.v = std::clamp(s.v + std::clamp(v_target - s.v, -lim.a_max * dt, lim.a_max * dt), lim.v_min, lim.v_max);
     s.w = std::clamp(s.w + std::clamp(w_target - s.w, -lim.b_max * dt, lim.b_max * dt), -lim.w_max, lim.w_max);
     agents_[i].hit = false;
+    agents_[i].touched = -1;
   }
 
   // 2. Motion, agent by agent.
@@ -314,7 +325,10 @@ void MultiWorld::step(double dt, std::span<const AgentCommand> commands) {
     Agent& a = agents_[i];
     if (a.body != AgentBody::kSolid) continue;
     for (std::size_t j = 0; j < agents_.size() && !a.hit; ++j) {
-      if (agents_[j].body == AgentBody::kGhost && overlapping(i, j)) a.hit = true;
+      if (agents_[j].body == AgentBody::kGhost && overlapping(i, j)) {
+        a.hit = true;
+        a.touched = static_cast<int>(j);
+      }
     }
   }
   for (std::size_t i = 0; i < agents_.size(); ++i) {

@@ -74,6 +74,9 @@ class MultiWorld {
 
   // Whether agent i's motion was stopped, or it touched something, in the last step.
   bool collidedLastStep(std::size_t i) const { return agents_[i].hit; }
+  // What agent i touched in the last step when collidedLastStep(i): another agent's index, or
+  // -1 for the map (its obstacles or bounds).
+  int touchedLastStep(std::size_t i) const { return agents_[i].touched; }
   bool inContact(std::size_t i) const { return agents_[i].in_contact; }
   int collisionEpisodes(std::size_t i) const { return agents_[i].episodes; }
   double distance(std::size_t i) const { return agents_[i].distance; }
@@ -95,6 +98,7 @@ class MultiWorld {
     Polygon footprint;
     Box box;
     bool hit = false;
+    int touched = -1;  // what was hit: an agent's index, or -1 for the map
     bool in_contact = false;
     int episodes = 0;
     double distance = 0.0;

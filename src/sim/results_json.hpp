@@ -2,6 +2,7 @@
 // JSON of the simulator's result figures, shared by `staa-sim --json` and the experiment's
 // results.json so that both spell the ARCHITECTURE.md section 6 keys the same way.
 
+#include "sim/multi_sim.hpp"
 #include "sim/sim_runner.hpp"
 
 #include <nlohmann/json.hpp>
@@ -29,6 +30,25 @@ inline nlohmann::ordered_json plannerJson(int calls, const Distribution& expansi
   planner["depth_mean"] = depth_mean;
   planner["plan_us"] = distributionJson(plan_us, false, true);
   return planner;
+}
+
+// The "contacts" list of a multi-agent run (not in ARCHITECTURE.md section 6 yet): one object
+// per counted contact episode; "other" and the tiers are null for the map and for no plan.
+inline nlohmann::ordered_json contactsJson(const std::vector<ContactRecord>& contacts) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  auto orNull = [](int value) { return value >= 0 ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr); };
+  for (const ContactRecord& c : contacts) {
+    nlohmann::ordered_json j;
+    j["time_s"] = c.time_s;
+    j["agent"] = c.agent;
+    j["other"] = orNull(c.other);
+    j["speed"] = c.speed;
+    j["other_speed"] = c.other_speed;
+    j["tier"] = orNull(c.tier);
+    j["other_tier"] = orNull(c.other_tier);
+    list.push_back(std::move(j));
+  }
+  return list;
 }
 
 }  // namespace staa

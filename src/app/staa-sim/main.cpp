@@ -497,6 +497,7 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
                           {"ghost", o.mode == staa::SimMode::kGhost && i > 0}});
   }
   j["agents"] = std::move(agents);
+  j["contacts"] = staa::contactsJson(r.contacts);
   return j;
 }
 

@@ -61,11 +61,13 @@ TEST(StaaStar, NoTunnellingThroughAFiveCentimetreWall) {
     return false;
   };
   bench.config.check_swept = false;
+  bench.config.brake_safety = false;  // the paper's planner: no braking check of the first action
   StaaStar endpoints_only = bench.planner();
   const PlanResult jumped = endpoints_only.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(400));
   EXPECT_TRUE(crosses(jumped.trajectory)) << "the end-pose check should show the original's weakness";
 
   bench.config.check_swept = true;
+  bench.config.brake_safety = true;
   StaaStar swept = bench.planner();
   const PlanResult safe = swept.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(400));
   EXPECT_FALSE(crosses(safe.trajectory));
@@ -91,6 +93,34 @@ TEST(StaaStar, BrakesWhenEverySuccessorCollides) {
   const Action b = brakeAction(UnicycleState{0, 0, 0, 0.3, -0.5}, bench.robot.limits, 0.3);
   EXPECT_DOUBLE_EQ(b.a, -1.0);  // not past zero within the step
   EXPECT_NEAR(b.b, 0.5 / 0.3, 1e-12);
+}
+
+// Head-on with another agent (an 0.8 m body at 1.8 m/s towards the robot, which goes 1.8 m/s
+// too): far away, some first action passes a braking check; close, none does, and the robot
+// must not keep its speed. It may only take the least bad actions: those after which braking
+// meets the agent latest (before, every action was allowed then, and two agents in the
+// experiment sped up towards each other once neither could stop in time).
+TEST(StaaStar, WhenNoFirstActionCanStopInTimeItSlowsDownInsteadOfKeepingItsSpeed) {
+  auto planAt = [](double gap_x) {
+    Bench bench(paperAgentProfile(), {}, 0.5);
+    const Polygon agent = box(gap_x - 0.4, -0.4, gap_x + 0.4, 0.4);
+    const PolygonView views[] = {PolygonView{agent.data(), agent.size()}};
+    const Vec2 velocities[] = {Vec2(-1.8, 0.0)};
+    bench.obstacles.set(views, velocities);
+    const UnicycleState start{0.0, 0.0, 0.0, 1.8, 0.0};
+    bench.update(start, Vec2(9.0, 0.0));
+    StaaStar planner = bench.planner();
+    return planner.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(1000));
+  };
+  const PlanResult far = planAt(7.5);
+  EXPECT_GE(far.brake_safety_tier, 1);
+  EXPECT_GT(far.brake_safe_actions, 0u);
+
+  const PlanResult close = planAt(2.6);
+  EXPECT_EQ(close.brake_safety_tier, 0);
+  EXPECT_GT(close.brake_safe_actions, 0u);
+  EXPECT_LT(close.brake_safe_actions, 49u);
+  EXPECT_LT(close.first_action.a, 0.0) << "linear acceleration of the chosen first action";
 }
 
 TEST(StaaStar, AbortsWithinBudgetAndReturnsTheLowestHeuristicState) {

@@ -108,6 +108,9 @@ TEST(Experiment, TinyExperimentWritesEveryRunWithTheRequiredKeysAndAFigure) {
     for (const char* key : {"p50", "p99", "max"}) EXPECT_TRUE(r["planner"]["plan_us"].contains(key));
     EXPECT_EQ(r["map"], "clutter");
     EXPECT_EQ(r["score"].get<int>(), r["goals_reached"].get<int>() - r["collisions"].get<int>());
+    // One contact record per counted collision.
+    ASSERT_TRUE(r["contacts"].is_array()) << r.dump();
+    EXPECT_EQ(r["contacts"].size(), r["collisions"].get<std::size_t>());
     EXPECT_EQ(r["seed"].get<int>(), 1 + r["run"].get<int>());
     EXPECT_NEAR(r["duration_s"].get<double>(), 3.0, 0.05);
     if (r["controller"] == "staa") {

@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <map>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -42,19 +41,8 @@ MultiSimOptions officeOptions(std::uint64_t seed) {
   return o;
 }
 
-// The office runs are shared between tests (each takes a few seconds).
-const MultiSimResult& officeRun(std::uint64_t seed, int copy) {
-  static std::map<std::pair<std::uint64_t, int>, MultiSimResult> runs;
-  const auto key = std::make_pair(seed, copy);
-  auto it = runs.find(key);
-  if (it == runs.end()) {
-    it = runs.emplace(key, runMultiAgent(generateOfficeMap(), paperAgentProfile(), officeOptions(seed))).first;
-  }
-  return it->second;
-}
-
 TEST(MultiSim, CooperativeStaaAgentsReachGoalsInTheOffice) {
-  const MultiSimResult& r = officeRun(1, 0);
+  const MultiSimResult r = runMultiAgent(generateOfficeMap(), paperAgentProfile(), officeOptions(1));
   ASSERT_EQ(r.agents.size(), 3u);
   EXPECT_NEAR(r.duration_s, 12.0, 1e-9);
   EXPECT_GT(r.goals_reached, 0);
@@ -78,8 +66,13 @@ TEST(MultiSim, CooperativeStaaAgentsReachGoalsInTheOffice) {
 }
 
 TEST(MultiSim, TheSameSeedGivesTheSameRunBitForBit) {
-  const MultiSimResult& a = officeRun(1, 0);
-  const MultiSimResult& b = officeRun(1, 1);
+  // Two fresh 6 s runs (agents meet and replan well before then); the 12 s run of the test
+  // above would double this test's time for no more coverage.
+  MultiSimOptions o = officeOptions(1);
+  o.duration_s = 6.0;
+  const MultiSimResult a = runMultiAgent(generateOfficeMap(), paperAgentProfile(), o);
+  const MultiSimResult b = runMultiAgent(generateOfficeMap(), paperAgentProfile(), o);
+  ASSERT_GT(a.calls, 0);
   EXPECT_EQ(a.goals_reached, b.goals_reached);
   EXPECT_EQ(a.collisions, b.collisions);
   EXPECT_EQ(a.calls, b.calls);
@@ -166,6 +159,38 @@ TEST(MultiSim, HeadOnStaaAgentsPassInACorridorWithoutCollision) {
   EXPECT_LT(closest, 1.5);  // and really met (side by side, about 1 m apart)
 }
 
+TEST(MultiSim, AContactRecordsWhoTouchedWhatTheirSpeedsAndTheSafetyTier) {
+  // A 1.6 m corridor closed at its east end; a ghost runs down it into the dead end, through
+  // the observed STAA* agent, which has nowhere to go: one contact, recorded with the ghost
+  // as the other party.
+  const PolygonMap corridor =
+      openMap(14.0, 3.0, {rect(0.0, 0.0, 14.0, 0.7), rect(0.0, 2.3, 14.0, 3.0), rect(7.0, 0.7, 14.0, 2.3)});
+  MultiSimOptions o;
+  o.agents = 2;
+  o.mode = SimMode::kGhost;
+  o.controller = ControllerKind::kStaa;
+  o.duration_s = 6.0;
+  o.budget_expansions = 300;
+  o.starts = {Pose2{6.0, 1.5, kPi}, Pose2{1.0, 1.5, 0.0}};
+  o.goal_sequences = {{Vec2(1.0, 1.5)}, {Vec2(6.4, 1.5)}};
+  int cycles = 0;
+  o.on_cycle = [&](std::size_t agent, const CycleOutput&) { cycles += agent == 0 ? 1 : 0; };
+  const MultiSimResult r = runMultiAgent(corridor, paperAgentProfile(), o);
+  EXPECT_EQ(cycles, 180);
+  ASSERT_EQ(r.collisions, 1);
+  ASSERT_EQ(r.contacts.size(), 1u);
+  const ContactRecord& c = r.contacts[0];
+  EXPECT_EQ(c.agent, 0);
+  EXPECT_EQ(c.other, 1);
+  EXPECT_GT(c.time_s, 1.0);
+  EXPECT_LT(c.time_s, 4.0);
+  EXPECT_GT(c.other_speed, 1.5);  // the ghost drives on at full speed
+  EXPECT_LT(c.speed, c.other_speed);
+  EXPECT_GE(c.tier, 0);  // STAA* planned
+  EXPECT_LE(c.tier, 2);
+  EXPECT_EQ(c.other_tier, -1);  // the ghost runs the PD controller
+}
+
 TEST(MultiWorld, TwoAgentsPlacedTouchingCountOneEpisodeEachAndCanBackAway) {
   MultiWorld world(openMap(10.0, 10.0), paperAgentProfile());
   // Nose to nose: both fronts on x = 5 (the footprint reaches 0.4 m ahead).
@@ -173,7 +198,10 @@ TEST(MultiWorld, TwoAgentsPlacedTouchingCountOneEpisodeEachAndCanBackAway) {
   world.addAgent(Pose2{5.4, 5.0, kPi}, AgentBody::kSolid);
   ASSERT_TRUE(world.overlapping(0, 1));
   const std::vector<AgentCommand> push{{1.0, 0.0}, {1.0, 0.0}};
-  for (int k = 0; k < 15; ++k) world.step(kDt, push);
+  world.step(kDt, push);
+  EXPECT_EQ(world.touchedLastStep(0), 1);
+  EXPECT_EQ(world.touchedLastStep(1), 0);
+  for (int k = 1; k < 15; ++k) world.step(kDt, push);
   // Pushing into each other: neither moves, one episode each.
   EXPECT_EQ(world.agent(0).pose.x, 4.6);
   EXPECT_EQ(world.agent(1).pose.x, 5.4);
@@ -208,7 +236,10 @@ TEST(MultiWorld, AnAgentDrivenIntoAWallStopsAtIt) {
   int first_contact_step = -1;
   for (int k = 0; k < 90; ++k) {
     world.step(kDt, ahead);
-    if (first_contact_step < 0 && world.collidedLastStep(0)) first_contact_step = k;
+    if (first_contact_step < 0 && world.collidedLastStep(0)) {
+      first_contact_step = k;
+      EXPECT_EQ(world.touchedLastStep(0), -1);  // the map
+    }
   }
   EXPECT_GT(first_contact_step, 0);
   const RobotState& s = world.agent(0);
@@ -236,6 +267,9 @@ TEST(MultiWorld, AGhostPassesThroughASolidAgentThatCountsOneEpisode) {
   for (int k = 0; k < 120; ++k) {  // 8 m at 2 m/s
     world.step(kDt, cmd);
     overlapped = overlapped || world.overlapping(0, 1);
+    if (world.overlapping(0, 1)) {
+      EXPECT_EQ(world.touchedLastStep(0), 1);
+    }
   }
   EXPECT_TRUE(overlapped);
   EXPECT_EQ(world.agent(0).pose.x, 6.0);  // not pushed
