@@ -248,28 +248,21 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const {
   return true;
 }
 
-bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
-                                       double spread) const {
+bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t) const {
   const Vec2 p = pose.position();
   bool placed = false;
-  spread = std::max(0.0, spread);
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     const FixedPolygon& o = obstacles.observed(k);
     const Vec2 shift = obstacles.displacement(k, t);
     const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
     const double r = 0.5 * (o.box.max - o.box.min).norm();
-    // The rounded corners of the grown polygon lie within sqrt(2) * spread of the outline.
-    const double reach = r + circumradius_ + 2.0 * dynamic_margin_ + 1.5 * spread;
+    const double reach = r + circumradius_ + 2.0 * dynamic_margin_;
     if ((center - p).squaredNorm() > reach * reach) continue;
     if (!placed) {
       transformPolygon(footprint_dynamic_, pose, placed_);
       placed = true;
     }
-    if (spread > 0.0) {
-      obstacles.predictInflated(k, t, spread, 1, scratch_);
-    } else {
-      obstacles.predict(k, t, scratch_);
-    }
+    obstacles.predict(k, t, scratch_);
     const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
     if (convex_ ? convexIntersect(robot, scratch_.view()) : polygonsOverlap(robot, scratch_.view())) return false;
   }
@@ -277,7 +270,7 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
 }
 
 bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                                         const DynamicObstacleSet& obstacles, double t0, double deviation_accel) const {
+                                         const DynamicObstacleSet& obstacles, double t0) const {
   if (obstacles.size() == 0) return true;
   // Enough samples that neither the robot nor the fastest obstacle moves more than a sample
   // step between two of them.
@@ -286,8 +279,7 @@ bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVel
   const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
   for (int k = n; k >= 1; --k) {
     const double t = dt * k / n;
-    const double spread = deviation_accel > 0.0 ? 0.5 * deviation_accel * (t0 + t) * (t0 + t) : 0.0;
-    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t, spread)) return false;
+    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t)) return false;
   }
   return true;
 }

@@ -41,16 +41,11 @@ class CollisionChecker {
   // close enough that no footprint point moves more than a sample step between them.
   bool motionFreeStatic(const UnicycleState& from, const ArcVelocities& vel, double dt) const;
   bool motionFreeStatic(const ArcMotion& motion) const;
-  // The footprint at `pose` overlaps none of the obstacles moved to time t, each grown by
-  // `spread` (m; 0: as predicted).
-  bool poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t, double spread = 0.0) const;
-  // The motion, sampled as above, against the obstacles moving over [t0, t0 + dt]. With
-  // deviation_accel > 0 each obstacle at time t is grown by 0.5 * deviation_accel * t^2: the
-  // farthest an obstacle that turns, speeds up or slows down at up to that acceleration (m/s^2)
-  // can be from its prediction (the braking checks use it: real obstacles do not keep
-  // straight lines, and two robots turning towards each other were predicted to pass).
+  // The footprint at `pose` overlaps none of the obstacles moved to time t.
+  bool poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t) const;
+  // The motion, sampled as above, against the obstacles moving over [t0, t0 + dt].
   bool motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                         const DynamicObstacleSet& obstacles, double t0, double deviation_accel = 0.0) const;
+                         const DynamicObstacleSet& obstacles, double t0) const;
 
   // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3).
   double distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const;

@@ -64,11 +64,6 @@ struct StaaConfig {
   bool passive_safety = true;
   double obstacle_reaction_s = 0.3;
   double obstacle_brake_decel = 2.0;  // m/s^2
-  // Both braking checks grow every obstacle's prediction by 0.5 * a * t^2 at time t: the room
-  // an obstacle that turns or changes speed at up to this acceleration (m/s^2) needs beyond
-  // the straight line. 0: the straight line only (two agents turning towards each other
-  // were each predicted to pass the other until neither could stop: docs/results.md).
-  double obstacle_deviation_accel = 0.0;
   double brake_step_s = 0.15;         // the braking manoeuvre is checked in steps of this
 };
 
@@ -156,9 +151,7 @@ class StaaStar {
   // obstacle has stopped: +infinity when it stays free of the map and of `obstacles`, else the
   // time (from the plan's start, to a brake step) at which it first touches something.
   // With `stand` false only the braking is checked.
-  // Each obstacle's prediction is grown by 0.5 * deviation_accel * t^2 (CollisionChecker).
-  double brakeClearTime(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand,
-                        double deviation_accel) const;
+  double brakeClearTime(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand) const;
   // Fills root_ok_ with each first action's tier (0..2) from `start`, root_clear_ and
   // root_allowed_ (the best tier's actions, or the least bad ones); returns the best tier any
   // action reached (braking_obstacles_ must hold this cycle's copy).
