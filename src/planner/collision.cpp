@@ -248,7 +248,8 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const {
   return true;
 }
 
-bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t) const {
+bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
+                                       double heading_spread) const {
   const Vec2 p = pose.position();
   bool placed = false;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
@@ -256,13 +257,19 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
     const Vec2 shift = obstacles.displacement(k, t);
     const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
     const double r = 0.5 * (o.box.max - o.box.min).norm();
-    const double reach = r + circumradius_ + 2.0 * dynamic_margin_;
+    const double spread = heading_spread > 0.0 ? heading_spread * shift.norm() : 0.0;
+    // The grown polygon's rounded corners lie within sqrt(2) * spread of the outline.
+    const double reach = r + circumradius_ + 2.0 * dynamic_margin_ + 1.5 * spread;
     if ((center - p).squaredNorm() > reach * reach) continue;
     if (!placed) {
       transformPolygon(footprint_dynamic_, pose, placed_);
       placed = true;
     }
-    obstacles.predict(k, t, scratch_);
+    if (spread > 0.0) {
+      obstacles.predictInflated(k, t, spread, 1, scratch_);
+    } else {
+      obstacles.predict(k, t, scratch_);
+    }
     const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
     if (convex_ ? convexIntersect(robot, scratch_.view()) : polygonsOverlap(robot, scratch_.view())) return false;
   }
@@ -270,7 +277,7 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
 }
 
 bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                                         const DynamicObstacleSet& obstacles, double t0) const {
+                                         const DynamicObstacleSet& obstacles, double t0, double heading_spread) const {
   if (obstacles.size() == 0) return true;
   // Enough samples that neither the robot nor the fastest obstacle moves more than a sample
   // step between two of them.
@@ -279,7 +286,7 @@ bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVel
   const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
   for (int k = n; k >= 1; --k) {
     const double t = dt * k / n;
-    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t)) return false;
+    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t, heading_spread)) return false;
   }
   return true;
 }

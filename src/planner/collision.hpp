@@ -41,11 +41,15 @@ class CollisionChecker {
   // close enough that no footprint point moves more than a sample step between them.
   bool motionFreeStatic(const UnicycleState& from, const ArcVelocities& vel, double dt) const;
   bool motionFreeStatic(const ArcMotion& motion) const;
-  // The footprint at `pose` overlaps none of the obstacles moved to time t.
-  bool poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t) const;
+  // The footprint at `pose` overlaps none of the obstacles moved to time t. With
+  // heading_spread > 0 (rad) each obstacle is grown by heading_spread times the distance it
+  // has moved: the room an obstacle needs whose heading is known only to about that angle
+  // (one that turns), in proportion to its speed (a slow one barely grows).
+  bool poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
+                       double heading_spread = 0.0) const;
   // The motion, sampled as above, against the obstacles moving over [t0, t0 + dt].
   bool motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                         const DynamicObstacleSet& obstacles, double t0) const;
+                         const DynamicObstacleSet& obstacles, double t0, double heading_spread = 0.0) const;
 
   // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3).
   double distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const;

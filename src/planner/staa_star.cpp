@@ -97,7 +97,7 @@ std::int32_t StaaStar::pop() {
 }
 
 double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const DynamicObstacleSet& obstacles,
-                                bool stand) const {
+                                bool stand, double heading_spread) const {
   constexpr double kClear = std::numeric_limits<double>::infinity();
   const double step = config_.brake_step_s;
   UnicycleState s = from;
@@ -105,7 +105,7 @@ double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const Dyna
   for (int k = 0; k < 64 && (std::abs(s.v) > 1e-3 || std::abs(s.w) > 1e-3); ++k) {
     const ArcVelocities vel = arcVelocities(s, brakeAction(s, limits_, step), step, limits_);
     if (!collision_.motionFreeStatic(s, vel, step)) return t;
-    if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t)) return t;
+    if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t, heading_spread)) return t;
     const Pose2 p = poseAlongArc(s, vel.v_mid, vel.w_mid, step);
     s = UnicycleState{p.x, p.y, p.theta, vel.v_end, vel.w_end};
     t += step;
@@ -123,7 +123,9 @@ double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const Dyna
   // In steps, so that a collision while standing has a time too.
   const ArcVelocities stand_still{0.0, 0.0, 0.0, 0.0};
   for (; t < last_stop; t += step) {
-    if (!collision_.motionFreeDynamic(s, stand_still, std::min(step, last_stop - t), obstacles, t)) return t;
+    if (!collision_.motionFreeDynamic(s, stand_still, std::min(step, last_stop - t), obstacles, t, heading_spread)) {
+      return t;
+    }
   }
   return kClear;
 }
@@ -145,7 +147,8 @@ std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicOb
         tier = 1;
         // Passive safety: the same stop against the obstacles at constant velocity.
         if (config_.passive_safety &&
-            (obstacles.size() == 0 || std::isinf(brakeClearTime(child, config_.dt, obstacles, false)))) {
+            (obstacles.size() == 0 ||
+             std::isinf(brakeClearTime(child, config_.dt, obstacles, false, config_.passive_heading_spread)))) {
           tier = 2;
         }
       }

@@ -1,4 +1,5 @@
 #include "planner/staa_star.hpp"
+#include "planner/collision.hpp"
 
 #include "geometry/clipper_ops.hpp"
 #include "geometry/convex.hpp"
@@ -93,6 +94,30 @@ TEST(StaaStar, BrakesWhenEverySuccessorCollides) {
   const Action b = brakeAction(UnicycleState{0, 0, 0, 0.3, -0.5}, bench.robot.limits, 0.3);
   EXPECT_DOUBLE_EQ(b.a, -1.0);  // not past zero within the step
   EXPECT_NEAR(b.b, 0.5 / 0.3, 1e-12);
+}
+
+// The passive tier's heading spread grows a moving obstacle by the angle times the distance
+// it has moved, so a mover predicted to pass 0.5 m beside the robot counts as in the way when
+// its heading is uncertain; a standing obstacle does not grow.
+TEST(CollisionChecker, HeadingSpreadGrowsAMovingObstacleByTheDistanceItMoved) {
+  const CollisionChecker checker(paperAgentProfile(), LocalMapConfig{}, 0.02);
+  const Pose2 robot{0.0, 0.0, 0.0};  // footprint up to y = 0.25
+  DynamicObstacleSet movers(4);
+  const Polygon passing = box(-1.2, 0.8, -0.8, 1.2);  // at t = 1 s: x in [-0.2, 0.2], 0.55 m above
+  const Polygon standing = box(-0.2, 0.85, 0.2, 1.25);
+  const PolygonView views[] = {PolygonView{passing.data(), passing.size()}};
+  const Vec2 velocity[] = {Vec2(1.0, 0.0)};
+  movers.set(views, velocity);
+  EXPECT_TRUE(checker.poseFreeDynamic(robot, movers, 1.0));
+  EXPECT_TRUE(checker.poseFreeDynamic(robot, movers, 1.0, 0.3));   // grown 0.3 m: still clear
+  EXPECT_FALSE(checker.poseFreeDynamic(robot, movers, 1.0, 0.6));  // grown 0.6 m: in the way
+  EXPECT_TRUE(checker.poseFreeDynamic(robot, movers, 0.0, 0.6));   // not moved yet: not grown
+
+  DynamicObstacleSet still(4);
+  const PolygonView still_views[] = {PolygonView{standing.data(), standing.size()}};
+  const Vec2 zero[] = {Vec2(0.0, 0.0)};
+  still.set(still_views, zero);
+  EXPECT_TRUE(checker.poseFreeDynamic(robot, still, 1.0, 0.6));
 }
 
 // Head-on with another agent (an 0.8 m body at 1.8 m/s towards the robot, which goes 1.8 m/s
