@@ -488,39 +488,44 @@ TEST(SimHal, BaseAndPerceptionThreadsShareOnlyWholeFrames) {
   SimHal hal(generatePaperMap("office", 1), paperAgentProfile(), c, 0);
   std::atomic<rt::Nanos> clock{0};
   std::atomic<bool> done{false};
+  std::atomic<int> frames{0};
   std::thread base([&] {
     VelocityCommand cmd;
     cmd.v = 0.4;
     cmd.w = 0.3;
-    for (int k = 0; k <= 300; ++k) {
+    // 300 steps, and on until the reader has had a few frames: on a loaded machine the
+    // reader may not run at all while 300 quick steps go by (a bound keeps a broken reader
+    // from hanging the test).
+    for (int k = 0; k <= 300 || (frames.load() < 3 && k < 3'000'000); ++k) {
       clock.store(k * kTick);
       hal.base().write(k * kTick, cmd);
       hal.base().read(k * kTick);
+      if (k > 300) std::this_thread::yield();
     }
     done.store(true);
   });
   ObstacleFrame frame;
-  int frames = 0;
   rt::Nanos last_stamp = -1;
   while (!done.load()) {
     if (!hal.obstacles().read(clock.load(), frame)) {
       std::this_thread::yield();
       continue;
     }
-    ++frames;
-    ASSERT_EQ(frame.count, 3u);
-    ASSERT_GE(frame.stamp, last_stamp);
+    frames.fetch_add(1);
+    // EXPECT, not ASSERT: returning here would leave the base thread running.
+    EXPECT_EQ(frame.count, 3u);
+    EXPECT_GE(frame.stamp, last_stamp);
     last_stamp = frame.stamp;
-    for (std::size_t i = 0; i < frame.count; ++i) {
+    for (std::size_t i = 0; i < frame.count && i < 3; ++i) {
       const ObstacleFrame::Obstacle& o = frame.obstacles[i];
-      ASSERT_EQ(o.n, 4u);
+      EXPECT_EQ(o.n, 4u);
+      if (o.n != 4u) continue;
       EXPECT_NEAR((o.vertices[2] - o.vertices[0]).norm(), 2.0 * std::sqrt(2.0) * c.mover_radius, 1e-9);
       EXPECT_NEAR(o.velocity.norm(), c.mover_speed, 1e-9);
     }
   }
   base.join();
-  EXPECT_GT(frames, 0);
-  EXPECT_GE(hal.collisions(), 0);
+  EXPECT_GE(frames.load(), 3);
 }
 
 TEST(SimHal, ReadWriteAndObstacleReadsAllocateNothingAfterWarmUp) {
