@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <stdexcept>
 #include <utility>
@@ -38,6 +39,20 @@ MultiSimOptions officeOptions(std::uint64_t seed) {
   o.duration_s = 12.0;  // long enough for goals; short for the ASan run in CI
   o.budget_expansions = 300;
   o.seed = seed;
+  return o;
+}
+
+// A scripted STAA* run: given start poses and goal sequences.
+MultiSimOptions scripted(SimMode mode, double duration_s, std::uint32_t budget, std::vector<Pose2> starts,
+                         std::vector<std::vector<Vec2>> goals) {
+  MultiSimOptions o;
+  o.agents = static_cast<int>(starts.size());
+  o.mode = mode;
+  o.controller = ControllerKind::kStaa;
+  o.duration_s = duration_s;
+  o.budget_expansions = budget;
+  o.starts = std::move(starts);
+  o.goal_sequences = std::move(goals);
   return o;
 }
 
@@ -101,14 +116,9 @@ TEST(MultiSim, ADifferentSeedGivesADifferentRun) {
 TEST(MultiSim, GhostsPassThroughEachOtherAndOnlyTheObservedAgentCounts) {
   // Two ghosts on crossing straight lines, 4 m from the crossing each, meet there; the
   // observed agent drives back and forth in a corner, away from them.
-  MultiSimOptions o;
-  o.agents = 3;
-  o.mode = SimMode::kGhost;
-  o.controller = ControllerKind::kStaa;
-  o.duration_s = 6.0;
-  o.budget_expansions = 200;
-  o.starts = {Pose2{1.5, 1.5, 0.0}, Pose2{2.0, 6.0, 0.0}, Pose2{6.0, 2.0, kPi / 2.0}};
-  o.goal_sequences = {{Vec2(3.5, 1.5), Vec2(1.5, 1.5)}, {Vec2(10.0, 6.0)}, {Vec2(6.0, 10.0)}};
+  MultiSimOptions o =
+      scripted(SimMode::kGhost, 6.0, 200, {Pose2{1.5, 1.5, 0.0}, Pose2{2.0, 6.0, 0.0}, Pose2{6.0, 2.0, kPi / 2.0}},
+               {{Vec2(3.5, 1.5), Vec2(1.5, 1.5)}, {Vec2(10.0, 6.0)}, {Vec2(6.0, 10.0)}});
   int overlapping_steps = 0;
   double slowest_while_overlapping = 1e9;
   o.on_step = [&](const MultiWorld& world) {
@@ -140,14 +150,8 @@ TEST(MultiSim, GhostsPassThroughEachOtherAndOnlyTheObservedAgentCounts) {
 TEST(MultiSim, HeadOnStaaAgentsPassInACorridorWithoutCollision) {
   // A 2 m corridor (walls 0.5 m thick), two agents driving at each other from its ends.
   const PolygonMap corridor = openMap(14.0, 3.0, {rect(0.0, 0.0, 14.0, 0.5), rect(0.0, 2.5, 14.0, 3.0)});
-  MultiSimOptions o;
-  o.agents = 2;
-  o.mode = SimMode::kCooperative;
-  o.controller = ControllerKind::kStaa;
-  o.duration_s = 10.0;
-  o.budget_expansions = 300;
-  o.starts = {Pose2{1.5, 1.5, 0.0}, Pose2{12.5, 1.5, kPi}};
-  o.goal_sequences = {{Vec2(12.5, 1.5), Vec2(1.5, 1.5)}, {Vec2(1.5, 1.5), Vec2(12.5, 1.5)}};
+  MultiSimOptions o = scripted(SimMode::kCooperative, 10.0, 300, {Pose2{1.5, 1.5, 0.0}, Pose2{12.5, 1.5, kPi}},
+                               {{Vec2(12.5, 1.5), Vec2(1.5, 1.5)}, {Vec2(1.5, 1.5), Vec2(12.5, 1.5)}});
   double closest = 1e9;
   o.on_step = [&](const MultiWorld& world) {
     closest = std::min(closest, (world.agent(0).pose.position() - world.agent(1).pose.position()).norm());
@@ -165,14 +169,8 @@ TEST(MultiSim, AContactRecordsWhoTouchedWhatTheirSpeedsAndTheSafetyTier) {
   // as the other party.
   const PolygonMap corridor =
       openMap(14.0, 3.0, {rect(0.0, 0.0, 14.0, 0.7), rect(0.0, 2.3, 14.0, 3.0), rect(7.0, 0.7, 14.0, 2.3)});
-  MultiSimOptions o;
-  o.agents = 2;
-  o.mode = SimMode::kGhost;
-  o.controller = ControllerKind::kStaa;
-  o.duration_s = 6.0;
-  o.budget_expansions = 300;
-  o.starts = {Pose2{6.0, 1.5, kPi}, Pose2{1.0, 1.5, 0.0}};
-  o.goal_sequences = {{Vec2(1.0, 1.5)}, {Vec2(6.4, 1.5)}};
+  MultiSimOptions o = scripted(SimMode::kGhost, 6.0, 300, {Pose2{6.0, 1.5, kPi}, Pose2{1.0, 1.5, 0.0}},
+                               {{Vec2(1.0, 1.5)}, {Vec2(6.4, 1.5)}});
   int cycles = 0;
   o.on_cycle = [&](std::size_t agent, const CycleOutput&) { cycles += agent == 0 ? 1 : 0; };
   const MultiSimResult r = runMultiAgent(corridor, paperAgentProfile(), o);
