@@ -18,6 +18,7 @@
 #include "shared_dir.hpp"
 
 #include "child_process.hpp"
+#include "read_file.hpp"
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -72,12 +73,7 @@ double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using staa::test::readFile;
 
 using staa::test::Child;
 

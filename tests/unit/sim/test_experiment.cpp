@@ -6,6 +6,8 @@
 #include "sim/experiment.hpp"
 #include "sim/experiment_plots.hpp"
 
+#include "read_file.hpp"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -30,12 +32,7 @@ namespace fs = std::filesystem;
 using Json = nlohmann::json;
 using ::testing::HasSubstr;
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using staa::test::readFile;
 
 fs::path freshDir(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("staa-experiment-test-" + std::to_string(::getpid()) + "-" + name);

@@ -20,6 +20,7 @@
 
 #include <gmock/gmock.h>
 #include "child_process.hpp"
+#include "read_file.hpp"
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -53,12 +54,7 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 constexpr rt::Nanos kMs = rt::kNanosPerMilli;
 
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using staa::test::readFile;
 
 // ---- the camera section ----
 

@@ -3,6 +3,8 @@
 
 #include "app/staad/protocol.hpp"
 
+#include "read_file.hpp"
+
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
 
@@ -122,12 +124,7 @@ struct CtlRun {
   std::string out, err;
 };
 
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using staa::test::readFile;
 
 class Staactl : public ::testing::Test {
  protected:

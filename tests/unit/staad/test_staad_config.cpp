@@ -1,5 +1,6 @@
 #include "app/staad/config.hpp"
 
+#include "read_file.hpp"
 #include "shared_dir.hpp"
 
 #include <gtest/gtest.h>
@@ -66,12 +67,7 @@ memory:
   stack_prefault_kb: 256
 )";
 
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using staa::test::readFile;
 
 // A temporary folder with the shipped robot profile and map beside the config, as in config/.
 class ConfigFiles : public ::testing::Test {

@@ -10,6 +10,7 @@
 //
 // Every wait has a timeout, and every process this test starts is killed in teardown.
 #include "child_process.hpp"
+#include "read_file.hpp"
 #include "shared_dir.hpp"
 
 #include <gtest/gtest.h>
@@ -49,12 +50,7 @@ using std::chrono::milliseconds;
 
 constexpr double kGoalTolerance = 0.2;
 
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using staa::test::readFile;
 
 using staa::test::Child;
 using staa::test::environmentWithout;

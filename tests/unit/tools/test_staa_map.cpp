@@ -6,6 +6,8 @@
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 
+#include "read_file.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -32,12 +34,7 @@ struct RunResult {
   std::string err;
 };
 
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using staa::test::readFile;
 
 // The text between single quotes, as error messages show values. Strings here are built by
 // appending: GCC 12 at -O3 warns falsely (-Wrestrict) on "'" + s + "'" and " " + s.
