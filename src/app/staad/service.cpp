@@ -235,32 +235,20 @@ const Status& Service::latest() {
 
 const Status& Service::status() {
   latest();
-  if (exec_hist_ != nullptr) {
-    const rt::TimingSummary e = exec_hist_->summary();
-    status_.cycle_p50_us = e.p50_us;
-    status_.cycle_p99_us = e.p99_us;
-    status_.cycle_max_us = e.max_us;
-  }
-  if (wake_hist_ != nullptr) {
-    const rt::TimingSummary w = wake_hist_->summary();
-    status_.wake_p50_us = w.p50_us;
-    status_.wake_p99_us = w.p99_us;
-    status_.wake_max_us = w.max_us;
-  }
+  // p50 / p99 / max of a histogram (when there is one) into three status fields.
+  auto summarize = [](const auto* hist, auto& p50, auto& p99, auto& max) {
+    if (hist == nullptr) return;
+    const rt::TimingSummary t = hist->summary();
+    p50 = t.p50_us;
+    p99 = t.p99_us;
+    max = t.max_us;
+  };
+  summarize(exec_hist_, status_.cycle_p50_us, status_.cycle_p99_us, status_.cycle_max_us);
+  summarize(wake_hist_, status_.wake_p50_us, status_.wake_p99_us, status_.wake_max_us);
   ThreadTiming& bt = status_.base_thread;
   bt.realtime = base_realtime_;
-  if (base_exec_hist_ != nullptr) {
-    const rt::TimingSummary e = base_exec_hist_->summary();
-    bt.exec_p50_us = e.p50_us;
-    bt.exec_p99_us = e.p99_us;
-    bt.exec_max_us = e.max_us;
-  }
-  if (base_wake_hist_ != nullptr) {
-    const rt::TimingSummary w = base_wake_hist_->summary();
-    bt.wake_p50_us = w.p50_us;
-    bt.wake_p99_us = w.p99_us;
-    bt.wake_max_us = w.max_us;
-  }
+  summarize(base_exec_hist_, bt.exec_p50_us, bt.exec_p99_us, bt.exec_max_us);
+  summarize(base_wake_hist_, bt.wake_p50_us, bt.wake_p99_us, bt.wake_max_us);
   if (base_task_ != nullptr) {
     const rt::PeriodicCounters c = base_task_->loopCounters();
     bt.cycles = c.cycles;
