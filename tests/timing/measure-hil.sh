@@ -170,29 +170,15 @@ trap - EXIT
 
 python3 - "$OUT" "$DURATION" "$CT_KIND" "$PERIOD_US" "$bursts" "$CORRUPT_FRAMES" <<'PY'
 import json, re, sys
+sys.path.insert(0, "tests/timing")  # the scripts run from the checkout's root
+import cyclictest_hist
 out, duration, ct_kind, period_us, bursts, frames = sys.argv[1], float(sys.argv[2]), sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
 s = json.load(open(f"{out}/status.json"))  # the status object
 b = json.load(open(f"{out}/basesim.json"))["state"]
 
 def trio(h): return {"p50_us": h["p50_us"], "p99_us": h["p99_us"], "max_us": h["max_us"]}
 
-def cyclic(path):
-    hist, overflow, mx = {}, 0, None
-    for line in open(path):
-        p = line.split()
-        if len(p) == 2 and p[0].isdigit() and p[1].isdigit(): hist[int(p[0])] = int(p[1])
-        if line.startswith('# Histogram Overflows'): overflow = int(line.split()[-1])
-        if line.startswith('# Max Latencies'): mx = int(line.split()[-1])
-    n = sum(hist.values()) + overflow
-    if n == 0 or mx is None: return None
-    def pct(q):
-        rank, seen = q / 100 * n, 0
-        for us in sorted(hist):
-            seen += hist[us]
-            if seen >= rank: return us
-        return mx
-    return {"count": n, "p50_us": pct(50), "p99_us": pct(99), "max_us": mx,
-            "over_period": sum(c for us, c in hist.items() if us >= period_us) + overflow}
+def cyclic(path): return cyclictest_hist.summary(path, period_us)
 
 bt = s["threads"]["base"]
 sent = b["corrupt_sent"]
