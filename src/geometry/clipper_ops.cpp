@@ -1,5 +1,6 @@
 #include "geometry/clipper_ops.hpp"
 
+#include "geometry/clipper_convert.hpp"
 #include "geometry/polygon.hpp"
 
 #include <clipper.hpp>
@@ -14,25 +15,9 @@ namespace {
 
 namespace cl = ClipperLib;
 
-// Clipper works on integers: 1 unit = 1 micrometre keeps every map far inside its range.
-constexpr double kScale = 1e6;
-
-cl::Path toPath(const Polygon& poly) {
-  cl::Path path;
-  path.reserve(poly.size());
-  for (const Vec2& p : poly) {
-    path.emplace_back(static_cast<cl::cInt>(std::llround(p.x() * kScale)),
-                      static_cast<cl::cInt>(std::llround(p.y() * kScale)));
-  }
-  return path;
-}
-
-Polygon toPolygon(const cl::Path& path) {
-  Polygon poly;
-  poly.reserve(path.size());
-  for (const cl::IntPoint& p : path) poly.emplace_back(p.X / kScale, p.Y / kScale);
-  return poly;
-}
+using clipper_convert::kScale;
+using clipper_convert::toPath;
+using clipper_convert::toPolygon;
 
 cl::Paths toPaths(const std::vector<Polygon>& polygons) {
   cl::Paths paths;

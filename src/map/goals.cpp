@@ -1,5 +1,6 @@
 #include "map/goals.hpp"
 
+#include "geometry/clipper_convert.hpp"
 #include "geometry/clipper_ops.hpp"
 #include "geometry/polygon.hpp"
 #include "geometry/splitmix64.hpp"
@@ -18,8 +19,6 @@ namespace {
 
 namespace cl = ClipperLib;
 
-// Clipper works on integers: 1 unit = 1 micrometre (as geometry/clipper_ops.cpp).
-constexpr double kScale = 1e6;
 // The obstacles are grown by the clearance plus this, with round corners whose chords stay
 // within it of the true arc: the grown shapes then contain every point closer than the
 // clearance, and the free space Clipper returns keeps at least the clearance.
@@ -47,24 +46,8 @@ std::string boxText(const Box& b) {
   return s;
 }
 
-cl::Path toPath(const Polygon& poly) {
-  cl::Path path;
-  path.reserve(poly.size());
-  for (const Vec2& p : poly) {
-    path.emplace_back(static_cast<cl::cInt>(std::llround(p.x() * kScale)),
-                      static_cast<cl::cInt>(std::llround(p.y() * kScale)));
-  }
-  return path;
-}
-
-Polygon toPolygon(const cl::Path& path) {
-  Polygon poly;
-  poly.reserve(path.size());
-  for (const cl::IntPoint& p : path) {
-    poly.emplace_back(static_cast<double>(p.X) / kScale, static_cast<double>(p.Y) / kScale);
-  }
-  return poly;
-}
+using clipper_convert::toPath;
+using clipper_convert::toPolygon;
 
 // One connected part of the free space: an outer ring and its holes (filled even-odd).
 struct Component {

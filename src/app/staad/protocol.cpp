@@ -300,6 +300,22 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
                {"bad_frames", status.base_bad_frames},
                {"rx_overflows", status.base_rx_overflows},
                {"error_frames", status.base_error_frames}};
+  // The base I/O path's timing: `threads.base` in the shape of the control thread's numbers,
+  // and how long a command took from the planner to the wire.
+  const ThreadTiming& t = status.base_thread;
+  j["threads"]["base"] = {
+      {"cycle",
+       {{"p50_us", t.exec_p50_us}, {"p99_us", t.exec_p99_us}, {"max_us", t.exec_max_us}, {"overruns", t.overruns},
+        {"count", t.cycles}}},
+      {"wake", {{"p50_us", t.wake_p50_us}, {"p99_us", t.wake_p99_us}, {"max_us", t.wake_max_us}}},
+      {"execution_overruns", t.execution_overruns},
+      {"late_wakeups", t.late_wakeups},
+      {"preempted", t.preempted},
+      {"skipped_periods", t.skipped_periods},
+      {"realtime", t.realtime}};
+  const CommandToWire& w = status.command_to_wire;
+  j["base"]["command_to_wire"] = {
+      {"p50_us", w.p50_us}, {"p99_us", w.p99_us}, {"max_us", w.max_us}, {"count", w.count}, {"unsent", w.unsent}};
 
   // Beyond the contract: what an engineer looks at when the contract's numbers look wrong.
   j["command"] = {status.v_cmd, status.w_cmd};

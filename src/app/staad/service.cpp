@@ -58,32 +58,6 @@ const char* levelName(rt::LogLevel level) {
   return "?";
 }
 
-// The status reply: the contract's object (statusJson) plus the base I/O path's timing,
-// which the service fills in status(): `threads.base` in the shape of the control thread's
-// `cycle`, `wake` and overrun counts, and `base.command_to_wire`.
-std::string fullStatusReply(const Status& s, std::uint64_t rt_allocations) {
-  using Json = nlohmann::json;
-  Json status = statusJson(s, rt_allocations);
-  const ThreadTiming& t = s.base_thread;
-  status["threads"]["base"] = {
-      {"cycle",
-       {{"p50_us", t.exec_p50_us}, {"p99_us", t.exec_p99_us}, {"max_us", t.exec_max_us}, {"overruns", t.overruns},
-        {"count", t.cycles}}},
-      {"wake", {{"p50_us", t.wake_p50_us}, {"p99_us", t.wake_p99_us}, {"max_us", t.wake_max_us}}},
-      {"execution_overruns", t.execution_overruns},
-      {"late_wakeups", t.late_wakeups},
-      {"preempted", t.preempted},
-      {"skipped_periods", t.skipped_periods},
-      {"realtime", t.realtime}};
-  const CommandToWire& w = s.command_to_wire;
-  status["base"]["command_to_wire"] = {
-      {"p50_us", w.p50_us}, {"p99_us", w.p99_us}, {"max_us", w.max_us}, {"count", w.count}, {"unsent", w.unsent}};
-  Json reply;
-  reply["ok"] = true;
-  reply["status"] = std::move(status);
-  return reply.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
-}
-
 }  // namespace
 
 void blockTerminationSignals() {
@@ -412,7 +386,7 @@ void Service::handleLine(Client& c, std::string_view line) {
   }
   const Request& request = std::get<Request>(parsed);
   if (request.kind == RequestKind::kStatus) {
-    c.out.append(fullStatusReply(status(), rt::realtimeAllocations()));
+    c.out.append(statusReply(status(), rt::realtimeAllocations()));
     return;
   }
   if (request.kind == RequestKind::kDebug) {

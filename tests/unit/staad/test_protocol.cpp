@@ -331,6 +331,34 @@ TEST(Protocol, StatusJsonCarriesTheBaseDriversCounters) {
   EXPECT_TRUE(statusJson(s, 0)["base"]["fault"].is_null());
 }
 
+TEST(Protocol, StatusJsonCarriesTheBaseThreadsTimingAndCommandToWire) {
+  Status s = filledStatus();
+  s.base_thread.cycles = 5000;
+  s.base_thread.exec_p50_us = 41.0;
+  s.base_thread.exec_max_us = 310.0;
+  s.base_thread.wake_p99_us = 77.0;
+  s.base_thread.overruns = 2;
+  s.base_thread.late_wakeups = 1;
+  s.base_thread.realtime = true;
+  s.command_to_wire.count = 900;
+  s.command_to_wire.unsent = 4;
+  s.command_to_wire.p99_us = 2500.0;
+  const Json j = Json::parse(statusReply(s, 0))["status"];
+  const Json& thread = j["threads"]["base"];
+  EXPECT_EQ(thread["cycle"]["count"], 5000);
+  EXPECT_EQ(thread["cycle"]["p50_us"], 41.0);
+  EXPECT_EQ(thread["cycle"]["max_us"], 310.0);
+  EXPECT_EQ(thread["cycle"]["overruns"], 2);
+  EXPECT_EQ(thread["wake"]["p99_us"], 77.0);
+  EXPECT_EQ(thread["late_wakeups"], 1);
+  EXPECT_EQ(thread["realtime"], true);
+  const Json& wire = j["base"]["command_to_wire"];
+  EXPECT_EQ(wire["count"], 900);
+  EXPECT_EQ(wire["unsent"], 4);
+  EXPECT_EQ(wire["p99_us"], 2500.0);
+  EXPECT_EQ(j["base"]["bad_frames"], s.base_bad_frames);  // beside the driver's counters
+}
+
 TEST(Protocol, NamesOfEnumsAreTheContractSpellings) {
   EXPECT_STREQ(toString(FaultKind::kNone), "none");
   EXPECT_STREQ(toString(FaultKind::kStaleOdometry), "stale_odometry");
