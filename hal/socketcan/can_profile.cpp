@@ -189,30 +189,30 @@ CanProfile parseCanProfile(const std::string& yaml_text, const std::string& sour
   const auto number = [&](const YAML::Node& section, const std::string& prefix, const char* key) {
     return r.positive(section[key], prefix + "." + key);
   };
+  // The velocity fields of the command and odometry frames: scales and limits, each limit
+  // within its int16 field.
+  const auto velocityFields = [&](const YAML::Node& section, const std::string& prefix, auto& out) {
+    out.v_scale = number(section, prefix, "v_scale");
+    out.w_scale = number(section, prefix, "w_scale");
+    out.v_limit = number(section, prefix, "v_limit");
+    out.w_limit = number(section, prefix, "w_limit");
+    r.fitsInt16(section["v_limit"], prefix + ".v_limit", out.v_limit, out.v_scale);
+    r.fitsInt16(section["w_limit"], prefix + ".w_limit", out.w_limit, out.w_scale);
+  };
 
   const YAML::Node cmd = root["command"];
   r.checkMapping(cmd, "command", {"id", "rate_hz", "v_scale", "w_scale", "v_limit", "w_limit"});
   p.command.id = readId(cmd, "command", "id");
   p.command.rate_hz = number(cmd, "command", "rate_hz");
-  p.command.v_scale = number(cmd, "command", "v_scale");
-  p.command.w_scale = number(cmd, "command", "w_scale");
-  p.command.v_limit = number(cmd, "command", "v_limit");
-  p.command.w_limit = number(cmd, "command", "w_limit");
-  r.fitsInt16(cmd["v_limit"], "command.v_limit", p.command.v_limit, p.command.v_scale);
-  r.fitsInt16(cmd["w_limit"], "command.w_limit", p.command.w_limit, p.command.w_scale);
+  velocityFields(cmd, "command", p.command);
 
   const YAML::Node odo = root["odometry"];
   r.checkMapping(odo, "odometry", {"id", "rate_hz", "v_scale", "w_scale", "v_limit", "w_limit", "max_dt_s", "timeout_s"});
   p.odometry.id = readId(odo, "odometry", "id");
   p.odometry.rate_hz = number(odo, "odometry", "rate_hz");
-  p.odometry.v_scale = number(odo, "odometry", "v_scale");
-  p.odometry.w_scale = number(odo, "odometry", "w_scale");
-  p.odometry.v_limit = number(odo, "odometry", "v_limit");
-  p.odometry.w_limit = number(odo, "odometry", "w_limit");
+  velocityFields(odo, "odometry", p.odometry);
   p.odometry.max_dt_s = number(odo, "odometry", "max_dt_s");
   p.odometry.timeout_s = number(odo, "odometry", "timeout_s");
-  r.fitsInt16(odo["v_limit"], "odometry.v_limit", p.odometry.v_limit, p.odometry.v_scale);
-  r.fitsInt16(odo["w_limit"], "odometry.w_limit", p.odometry.w_limit, p.odometry.w_scale);
   r.longerThanPeriod(odo["timeout_s"], "odometry.timeout_s", p.odometry.timeout_s, p.odometry.rate_hz);
 
   const YAML::Node st = root["status"];
