@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace staa {
 namespace {
@@ -67,6 +68,7 @@ std::size_t simplifyConvex(Vec2* v, std::size_t n, std::size_t target) {
 DynamicObstacleSet::DynamicObstacleSet(std::size_t max_obstacles)
     : obstacles_(max_obstacles),
       velocities_(max_obstacles, Vec2::Zero()),
+      turn_rates_(max_obstacles, 0.0),
       hull_scratch_(kHullScratch),
       hull_out_(kHullScratch + 1) {}
 
@@ -75,7 +77,8 @@ void DynamicObstacleSet::clear() {
   dropped_ = 0;
 }
 
-void DynamicObstacleSet::set(std::span<const PolygonView> polygons, std::span<const Vec2> velocities) {
+void DynamicObstacleSet::set(std::span<const PolygonView> polygons, std::span<const Vec2> velocities,
+                             std::span<const double> turn_rates) {
   clear();
   for (std::size_t k = 0; k < polygons.size(); ++k) {
     if (count_ == obstacles_.size()) {
@@ -84,6 +87,8 @@ void DynamicObstacleSet::set(std::span<const PolygonView> polygons, std::span<co
     }
     hullInto(polygons[k], obstacles_[count_]);
     velocities_[count_] = k < velocities.size() ? velocities[k] : Vec2::Zero();
+    const double w = k < turn_rates.size() ? turn_rates[k] : 0.0;
+    turn_rates_[count_] = std::isfinite(w) ? w : 0.0;
     ++count_;
   }
 }
@@ -114,6 +119,7 @@ void DynamicObstacleSet::copyFrom(const DynamicObstacleSet& other) {
   for (std::size_t k = 0; k < n; ++k) {
     obstacles_[k] = other.obstacles_[k];
     velocities_[k] = other.velocities_[k];
+    turn_rates_[k] = other.turn_rates_[k];
   }
   count_ = n;
   dropped_ = other.dropped_ + (other.count_ - n);
@@ -125,6 +131,39 @@ void DynamicObstacleSet::predict(std::size_t k, double t, FixedPolygon& out) con
   out.n = o.n;
   for (std::size_t i = 0; i < o.n; ++i) out.v[i] = o.v[i] + shift;
   out.box = o.n > 0 ? Box{o.box.min + shift, o.box.max + shift} : Box{};
+}
+
+void DynamicObstacleSet::predictTurning(std::size_t k, double t, FixedPolygon& out) const {
+  const FixedPolygon& o = obstacles_[k];
+  const Vec2 v = velocities_[k];
+  const double speed = v.norm();
+  const double w = turn_rates_[k];
+  if (o.n == 0 || !(speed > 1e-9) || !(std::abs(w) > 1e-9)) {
+    predict(k, t, out);
+    return;
+  }
+  // The distance travelled along the path (constant speed, or the braking hypothesis) and the
+  // angle the velocity has turned by then.
+  const double d = displacement(k, t).norm();
+  const double phi = w * d / speed;
+  // The chord of the arc: length 2 (d / phi) sin(phi / 2), along the velocity turned by phi / 2.
+  const double half = 0.5 * phi;
+  const double chord = std::abs(phi) > 1e-9 ? 2.0 * (d / phi) * std::sin(half) : d;
+  const Vec2 u = v / speed;
+  const double ch = std::cos(half), sh = std::sin(half);
+  const Vec2 shift = chord * Vec2{ch * u.x() - sh * u.y(), sh * u.x() + ch * u.y()};
+  const Vec2 c = 0.5 * (o.box.min + o.box.max);
+  const double cp = std::cos(phi), sp = std::sin(phi);
+  out.n = o.n;
+  Box box{Vec2::Constant(std::numeric_limits<double>::infinity()), Vec2::Constant(-std::numeric_limits<double>::infinity())};
+  for (std::size_t i = 0; i < o.n; ++i) {
+    const Vec2 r = o.v[i] - c;
+    const Vec2 p = c + shift + Vec2{cp * r.x() - sp * r.y(), sp * r.x() + cp * r.y()};
+    out.v[i] = p;
+    box.min = box.min.cwiseMin(p);
+    box.max = box.max.cwiseMax(p);
+  }
+  out.box = box;
 }
 
 void DynamicObstacleSet::predictInflated(std::size_t k, double t, double radius, int arc_steps,

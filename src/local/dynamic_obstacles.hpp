@@ -35,8 +35,11 @@ class DynamicObstacleSet {
   // extending neighbouring edges over the cheapest edge, so it still contains the polygon;
   // polygons of any vertex count are accepted (hulled in chunks). Non-finite vertices are
   // ignored. velocities[k] belongs to polygons[k]; missing velocities count as zero.
+  // turn_rates[k] (rad/s, counter-clockwise positive) is how fast obstacle k's velocity turns
+  // (a unicycle's w; missing: 0); only predictTurning uses it.
   // Obstacles beyond max_obstacles are dropped and counted (per call). No allocation.
-  void set(std::span<const PolygonView> polygons, std::span<const Vec2> velocities);
+  void set(std::span<const PolygonView> polygons, std::span<const Vec2> velocities,
+           std::span<const double> turn_rates = {});
   void clear();
   std::size_t size() const { return count_; }
   std::size_t dropped() const { return dropped_; }
@@ -53,8 +56,15 @@ class DynamicObstacleSet {
   // gives D(t). k < size(). No allocation.
   void predictInflated(std::size_t k, double t, double radius, int arc_steps, FixedPolygon& out) const;
 
+  // D(t) along a circle instead of a line: obstacle k keeps its speed (or the braking
+  // hypothesis's distance, as displacement()) while its velocity turns at its turn rate, and
+  // its polygon turns with it about its box centre (a unicycle driving at constant v and w).
+  // Turn rate 0: predict(). No allocation.
+  void predictTurning(std::size_t k, double t, FixedPolygon& out) const;
+
   const FixedPolygon& observed(std::size_t k) const { return obstacles_[k]; }
   Vec2 velocity(std::size_t k) const { return velocities_[k]; }
+  double turnRate(std::size_t k) const { return turn_rates_[k]; }
 
   // How far obstacle k has moved at time t: velocity * t (constant velocity, the default), or
   // under the braking hypothesis (setBraking) at constant velocity for the reaction time and
@@ -85,6 +95,7 @@ class DynamicObstacleSet {
 
   std::vector<FixedPolygon> obstacles_;
   std::vector<Vec2> velocities_;
+  std::vector<double> turn_rates_;
   std::vector<Vec2> hull_scratch_;
   std::vector<Vec2> hull_out_;
   std::size_t count_ = 0;

@@ -249,7 +249,7 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const {
 }
 
 bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
-                                       double heading_spread) const {
+                                       double heading_spread, bool turning) const {
   const Vec2 p = pose.position();
   bool placed = false;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
@@ -260,33 +260,53 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
     const double spread = heading_spread > 0.0 ? heading_spread * shift.norm() : 0.0;
     // The grown polygon's rounded corners lie within sqrt(2) * spread of the outline.
     const double reach = r + circumradius_ + 2.0 * dynamic_margin_ + 1.5 * spread;
-    if ((center - p).squaredNorm() > reach * reach) continue;
-    if (!placed) {
-      transformPolygon(footprint_dynamic_, pose, placed_);
-      placed = true;
+    const auto overlaps = [&](const FixedPolygon& obstacle) {
+      if (!placed) {
+        transformPolygon(footprint_dynamic_, pose, placed_);
+        placed = true;
+      }
+      const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
+      return convex_ ? convexIntersect(robot, obstacle.view()) : polygonsOverlap(robot, obstacle.view());
+    };
+    if ((center - p).squaredNorm() <= reach * reach) {
+      if (spread > 0.0) {
+        obstacles.predictInflated(k, t, spread, 1, scratch_);
+      } else {
+        obstacles.predict(k, t, scratch_);
+      }
+      if (overlaps(scratch_)) return false;
     }
-    if (spread > 0.0) {
-      obstacles.predictInflated(k, t, spread, 1, scratch_);
-    } else {
-      obstacles.predict(k, t, scratch_);
+    if (turning && obstacles.turnRate(k) != 0.0) {
+      obstacles.predictTurning(k, t, scratch_);
+      const Vec2 turned_center = 0.5 * (scratch_.box.min + scratch_.box.max);
+      const double turned_reach = 0.5 * (scratch_.box.max - scratch_.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
+      if ((turned_center - p).squaredNorm() <= turned_reach * turned_reach && overlaps(scratch_)) return false;
     }
-    const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
-    if (convex_ ? convexIntersect(robot, scratch_.view()) : polygonsOverlap(robot, scratch_.view())) return false;
   }
   return true;
 }
 
 bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                                         const DynamicObstacleSet& obstacles, double t0, double heading_spread) const {
+                                         const DynamicObstacleSet& obstacles, double t0, double heading_spread,
+                                         bool turning) const {
   if (obstacles.size() == 0) return true;
-  // Enough samples that neither the robot nor the fastest obstacle moves more than a sample
-  // step between two of them.
+  // Enough samples that neither the robot nor the fastest obstacle point moves more than a
+  // sample step between two of them (a turning obstacle's corners also sweep round).
   double fastest = 0.0;
-  for (std::size_t k = 0; k < obstacles.size(); ++k) fastest = std::max(fastest, obstacles.velocity(k).norm());
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    double speed = obstacles.velocity(k).norm();
+    if (turning) {
+      const FixedPolygon& o = obstacles.observed(k);
+      speed += std::abs(obstacles.turnRate(k)) * 0.5 * (o.box.max - o.box.min).norm();
+    }
+    fastest = std::max(fastest, speed);
+  }
   const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
   for (int k = n; k >= 1; --k) {
     const double t = dt * k / n;
-    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t, heading_spread)) return false;
+    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t, heading_spread, turning)) {
+      return false;
+    }
   }
   return true;
 }

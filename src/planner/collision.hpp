@@ -44,12 +44,15 @@ class CollisionChecker {
   // The footprint at `pose` overlaps none of the obstacles moved to time t. With
   // heading_spread > 0 (rad) each obstacle is grown by heading_spread times the distance it
   // has moved: the room an obstacle needs whose heading is known only to about that angle
-  // (one that turns), in proportion to its speed (a slow one barely grows).
+  // (one that turns), in proportion to its speed (a slow one barely grows). With `turning`,
+  // each obstacle that turns (DynamicObstacleSet::turnRate) must also be clear of it on its
+  // circle (predictTurning): the pose is free only if free of both predictions.
   bool poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
-                       double heading_spread = 0.0) const;
+                       double heading_spread = 0.0, bool turning = false) const;
   // The motion, sampled as above, against the obstacles moving over [t0, t0 + dt].
   bool motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                         const DynamicObstacleSet& obstacles, double t0, double heading_spread = 0.0) const;
+                         const DynamicObstacleSet& obstacles, double t0, double heading_spread = 0.0,
+                         bool turning = false) const;
 
   // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3).
   double distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const;

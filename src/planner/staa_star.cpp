@@ -97,7 +97,7 @@ std::int32_t StaaStar::pop() {
 }
 
 double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const DynamicObstacleSet& obstacles,
-                                bool stand, double heading_spread) const {
+                                bool stand, double heading_spread, bool turning) const {
   constexpr double kClear = std::numeric_limits<double>::infinity();
   const double step = config_.brake_step_s;
   UnicycleState s = from;
@@ -105,7 +105,7 @@ double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const Dyna
   for (int k = 0; k < 64 && (std::abs(s.v) > 1e-3 || std::abs(s.w) > 1e-3); ++k) {
     const ArcVelocities vel = arcVelocities(s, brakeAction(s, limits_, step), step, limits_);
     if (!collision_.motionFreeStatic(s, vel, step)) return t;
-    if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t, heading_spread)) return t;
+    if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t, heading_spread, turning)) return t;
     const Pose2 p = poseAlongArc(s, vel.v_mid, vel.w_mid, step);
     s = UnicycleState{p.x, p.y, p.theta, vel.v_end, vel.w_end};
     t += step;
@@ -123,7 +123,8 @@ double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const Dyna
   // In steps, so that a collision while standing has a time too.
   const ArcVelocities stand_still{0.0, 0.0, 0.0, 0.0};
   for (; t < last_stop; t += step) {
-    if (!collision_.motionFreeDynamic(s, stand_still, std::min(step, last_stop - t), obstacles, t, heading_spread)) {
+    if (!collision_.motionFreeDynamic(s, stand_still, std::min(step, last_stop - t), obstacles, t, heading_spread,
+                                      turning)) {
       return t;
     }
   }
@@ -142,13 +143,14 @@ std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicOb
     std::uint8_t tier = 0;
     double clear = 0.0;  // the action itself collides
     if (collision_.motionFreeStatic(motion) && collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0)) {
-      clear = brakeClearTime(child, config_.dt, braking_obstacles_, true);
+      clear = brakeClearTime(child, config_.dt, braking_obstacles_, true, 0.0, config_.predict_turning);
       if (std::isinf(clear)) {
         tier = 1;
         // Passive safety: the same stop against the obstacles at constant velocity.
         if (config_.passive_safety &&
             (obstacles.size() == 0 ||
-             std::isinf(brakeClearTime(child, config_.dt, obstacles, false, config_.passive_heading_spread)))) {
+             std::isinf(brakeClearTime(child, config_.dt, obstacles, false, config_.passive_heading_spread,
+                                       config_.predict_turning)))) {
           tier = 2;
         }
       }

@@ -69,6 +69,13 @@ struct StaaConfig {
   // straight line. 0.2 fixed that contact at a cost of 2 goals in 101 on the 5-agent clutter
   // runs; 0.3 cost 11 (seeds 1 and 2, 60 s).
   double passive_heading_spread = 0.2;
+  // Both braking checks also predict each obstacle that turns on its circle (its turn rate
+  // comes through the perception seam: the simulation's agents have one, the depth tracker
+  // gives 0): braking along its circle in the first, keeping its speed along it in the
+  // passive one; the stop must be clear of the straight and the circular prediction. The
+  // cooperative contacts on record were two agents turning into each other at 1.5-2 m/s,
+  // each predicted on a straight line (docs/results.md).
+  bool predict_turning = true;
   double obstacle_reaction_s = 0.3;
   double obstacle_brake_decel = 2.0;  // m/s^2
   double brake_step_s = 0.15;         // the braking manoeuvre is checked in steps of this
@@ -157,9 +164,10 @@ class StaaStar {
   // Braking at the limits from `s` (at time t0) to a stop, and standing there until every
   // obstacle has stopped: +infinity when it stays free of the map and of `obstacles`, else the
   // time (from the plan's start, to a brake step) at which it first touches something.
-  // With `stand` false only the braking is checked.
+  // With `stand` false only the braking is checked. heading_spread and turning: as
+  // CollisionChecker::poseFreeDynamic.
   double brakeClearTime(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand,
-                        double heading_spread = 0.0) const;
+                        double heading_spread = 0.0, bool turning = false) const;
   // Fills root_ok_ with each first action's tier (0..2) from `start`, root_clear_ and
   // root_allowed_ (the best tier's actions, or the least bad ones); returns the best tier any
   // action reached (braking_obstacles_ must hold this cycle's copy).

@@ -346,6 +346,7 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   s["map_seed"] = spec.map_seed;
   s["jobs"] = spec.jobs;
   s["robot"] = spec.robot.name;
+  s["predict_turning"] = spec.control.staa.predict_turning;
   doc["spec"] = std::move(s);
   return doc.dump(2) + "\n";
 }

@@ -235,6 +235,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   // Scratch for the perception seam and the commands, sized once.
   std::vector<PolygonView> views(n);
   std::vector<Vec2> velocities(n);
+  std::vector<double> turn_rates(n);
   std::vector<AgentCommand> commands(n);
   std::vector<Vec2> current_goals(options.on_step_goals ? n : 0);
   std::vector<int> episodes_before(n, 0);
@@ -252,15 +253,18 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     for (std::size_t i = 0; i < n; ++i) {
       SimAgent& a = *agents[i];
       if (a.perceives) {
-        // The seam where real perception will come in: the others' footprints and velocities.
+        // The seam where real perception will come in: the others' footprints, velocities and
+        // turn rates.
         std::size_t m = 0;
         for (std::size_t j = 0; j < n; ++j) {
           if (j == i) continue;
           views[m] = world.footprint(j);
           velocities[m] = world.velocity(j);
+          turn_rates[m] = world.agent(j).w;
           ++m;
         }
-        a.seen.set(std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m));
+        a.seen.set(std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m),
+                   std::span<const double>(turn_rates.data(), m));
       }
       const RobotState& rs = world.agent(i);
       CycleInputs in;

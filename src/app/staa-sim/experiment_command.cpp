@@ -130,7 +130,8 @@ int runCommand(int argc, char** argv) {
   std::string maps_text = "office,apartment,clutter", controllers_text = "pd,dwa,staa",
               modes_text = "cooperative,ghost", agents_text = "1,3,5", runs_text = "3", duration_text = "60",
               jobs_text = std::to_string(hw == 0 ? 1 : hw), heuristics_text = "path-rtr", budget_ms_text,
-              budget_exp_text, rate_text = "30", seed_text = "1", out_dir;
+              budget_exp_text, rate_text = "30", seed_text = "1", out_dir,
+              predict_turning_text = StaaConfig{}.predict_turning ? "on" : "off";
   bool quiet = false;
   app.add_option("--maps", maps_text,
                  "office, apartment, clutter (the paper's maps, generated) or polygon map files (a file without goals "
@@ -150,6 +151,10 @@ int runCommand(int argc, char** argv) {
   app.add_option("--budget-expansions", budget_exp_text,
                  "STAA* budget per cycle in queue pops: a bit-for-bit reproducible experiment");
   app.add_option("--rate", rate_text, "Control rate in Hz")->capture_default_str();
+  app.add_option("--predict-turning", predict_turning_text,
+                 "on or off: STAA*'s braking checks also predict turning agents on their circle "
+                 "(StaaConfig::predict_turning)")
+      ->capture_default_str();
   app.add_option("--seed", seed_text, "Base seed of the runs")->capture_default_str();
   app.add_option("--out", out_dir, "Output directory (created)")->required();
   app.add_flag("--quiet", quiet, "No progress line on stderr");
@@ -190,6 +195,10 @@ int runCommand(int argc, char** argv) {
     }
     appendUnique("--heuristics", item, spec.heuristics, h);
   }
+  if (predict_turning_text != "on" && predict_turning_text != "off") {
+    throw InputError("--predict-turning: expected on or off, got '" + predict_turning_text + "'");
+  }
+  spec.control.staa.predict_turning = predict_turning_text == "on";
   spec.runs = static_cast<int>(parseCount("--runs", runs_text, 1, 100000, "runs per cell"));
   spec.jobs = static_cast<int>(parseCount("--jobs", jobs_text, 1, 1024, "parallel runs"));
   spec.duration_s = parsePositive("--duration", duration_text, "simulated seconds");

@@ -222,5 +222,57 @@ TEST(DynamicObstacles, ZeroRadiusInflationIsThePrediction) {
   for (std::size_t i = 0; i < a.n; ++i) EXPECT_EQ(a.v[i], b.v[i]);
 }
 
+// A body driving a circle: 0.8 x 0.4 m, centred at the origin, heading +x at 1 m/s and
+// turning left at pi/2 rad/s (radius 2/pi m). After 1 s it has gone a quarter circle: centre at
+// (2/pi, 2/pi), turned by 90 degrees (0.4 x 0.8 m); after 2 s half a circle: centre (0, 4/pi),
+// heading -x. The braking hypothesis shortens the distance along the same circle.
+TEST(DynamicObstacles, PredictTurningFollowsTheCircleAndTurnsThePolygonWithIt) {
+  const Polygon body{{-0.4, -0.2}, {0.4, -0.2}, {0.4, 0.2}, {-0.4, 0.2}};
+  const PolygonView views[1] = {body};
+  const Vec2 vel[1] = {{1.0, 0.0}};
+  const double turn[1] = {kPi / 2.0};
+  DynamicObstacleSet set;
+  set.set(views, vel, turn);
+  EXPECT_DOUBLE_EQ(set.turnRate(0), kPi / 2.0);
+  FixedPolygon out;
+  const double r = 2.0 / kPi;
+  set.predictTurning(0, 1.0, out);
+  ASSERT_EQ(out.n, 4u);
+  EXPECT_NEAR(0.5 * (out.box.min.x() + out.box.max.x()), r, 1e-12);
+  EXPECT_NEAR(0.5 * (out.box.min.y() + out.box.max.y()), r, 1e-12);
+  EXPECT_NEAR(out.box.max.x() - out.box.min.x(), 0.4, 1e-12);  // turned by 90 degrees
+  EXPECT_NEAR(out.box.max.y() - out.box.min.y(), 0.8, 1e-12);
+  EXPECT_NEAR(signedArea(out.view()), signedArea(set.observed(0).view()), 1e-12);
+  set.predictTurning(0, 2.0, out);
+  EXPECT_NEAR(0.5 * (out.box.min.x() + out.box.max.x()), 0.0, 1e-12);
+  EXPECT_NEAR(0.5 * (out.box.min.y() + out.box.max.y()), 2.0 * r, 1e-12);
+  EXPECT_NEAR(out.box.max.x() - out.box.min.x(), 0.8, 1e-12);
+  // At t = 0 and with no turn rate: the straight prediction.
+  FixedPolygon straight;
+  set.predictTurning(0, 0.0, out);
+  set.predict(0, 0.0, straight);
+  for (std::size_t i = 0; i < out.n; ++i) EXPECT_NEAR((out.v[i] - straight.v[i]).norm(), 0.0, 1e-12);
+  DynamicObstacleSet no_turn;
+  no_turn.set(views, vel);
+  EXPECT_EQ(no_turn.turnRate(0), 0.0);
+  no_turn.predictTurning(0, 1.0, out);
+  no_turn.predict(0, 1.0, straight);
+  for (std::size_t i = 0; i < out.n; ++i) EXPECT_EQ(out.v[i], straight.v[i]);
+  // Braking (no reaction time, 1 m/s^2): 0.5 m travelled by t = 1 s and no more after; along
+  // the circle that is pi/4 of turn.
+  set.setBraking(0.0, 1.0);
+  set.predictTurning(0, 3.0, out);
+  const double phi = kPi / 4.0;
+  EXPECT_NEAR(0.5 * (out.box.min.x() + out.box.max.x()), r * std::sin(phi), 1e-12);
+  EXPECT_NEAR(0.5 * (out.box.min.y() + out.box.max.y()), r * (1.0 - std::cos(phi)), 1e-12);
+  // A copy keeps the turn rates; a non-finite one counts as 0.
+  DynamicObstacleSet copy;
+  copy.copyFrom(set);
+  EXPECT_DOUBLE_EQ(copy.turnRate(0), kPi / 2.0);
+  const double bad[1] = {std::nan("")};
+  set.set(views, vel, bad);
+  EXPECT_EQ(set.turnRate(0), 0.0);
+}
+
 }  // namespace
 }  // namespace staa

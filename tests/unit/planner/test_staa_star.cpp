@@ -120,6 +120,36 @@ TEST(CollisionChecker, HeadingSpreadGrowsAMovingObstacleByTheDistanceItMoved) {
   EXPECT_TRUE(checker.poseFreeDynamic(robot, still, 1.0, 0.6));
 }
 
+// An agent 2 m ahead driving across at 1.5 m/s and turning towards the robot at 1.5 rad/s
+// (radius 1 m): on its straight line it passes 2 m ahead; on its circle it comes round to
+// the robot's side of the road. The passive check with `turning` sees it there, without it
+// does not; an obstacle that does not turn is the same either way.
+TEST(CollisionChecker, TurningObstaclesAreAlsoCheckedOnTheirCircle) {
+  const CollisionChecker checker(paperAgentProfile(), LocalMapConfig{}, 0.02);
+  const Polygon agent = box(1.6, -2.2, 2.4, -1.8);  // centre (2, -2), heading +y
+  const PolygonView views[] = {PolygonView{agent.data(), agent.size()}};
+  const Vec2 velocity[] = {Vec2(0.0, 1.5)};
+  const double turn[] = {1.5};  // left, towards -x: centre of the circle at (1, -2)
+  DynamicObstacleSet movers(4);
+  movers.set(views, velocity, turn);
+  // After pi/3 s it has turned by pi/2: centre at (1, -1), heading -x. Straight: at (2, -0.43).
+  const double t = kPi / 3.0;
+  const Pose2 robot{1.0, -1.0, 0.0};
+  EXPECT_TRUE(checker.poseFreeDynamic(robot, movers, t));
+  EXPECT_TRUE(checker.poseFreeDynamic(robot, movers, t, 0.0, false));
+  EXPECT_FALSE(checker.poseFreeDynamic(robot, movers, t, 0.0, true));
+  // Where the straight line goes, it is still in the way with `turning` (both predictions).
+  EXPECT_FALSE(checker.poseFreeDynamic(Pose2{2.0, -0.43, kPi / 2.0}, movers, t, 0.0, true));
+  // And over a motion: standing at (1, -1) for the first 1.2 s.
+  const UnicycleState standing{1.0, -1.0, 0.0, 0.0, 0.0};
+  const ArcVelocities still{0.0, 0.0, 0.0, 0.0};
+  EXPECT_TRUE(checker.motionFreeDynamic(standing, still, 1.2, movers, 0.0, 0.0, false));
+  EXPECT_FALSE(checker.motionFreeDynamic(standing, still, 1.2, movers, 0.0, 0.0, true));
+  const double no_turn[] = {0.0};
+  movers.set(views, velocity, no_turn);
+  EXPECT_TRUE(checker.poseFreeDynamic(robot, movers, t, 0.0, true));
+}
+
 // Head-on with another agent (an 0.8 m body at 1.8 m/s towards the robot, which goes 1.8 m/s
 // too): far away, some first action passes a braking check; close, none does, and the robot
 // must not keep its speed. It may only take the least bad actions: those after which braking

@@ -129,6 +129,11 @@ TEST(Experiment, TinyExperimentWritesEveryRunWithTheRequiredKeysAndAFigure) {
   }
   EXPECT_EQ(doc["spec"]["budget"]["kind"], "expansions");
   EXPECT_EQ(doc["spec"]["runs"], 2);
+  EXPECT_EQ(doc["spec"]["predict_turning"], spec.control.staa.predict_turning);
+  ExperimentSpec turning = spec;
+  turning.control.staa.predict_turning = !spec.control.staa.predict_turning;
+  const Json doc_turning = Json::parse(readFile(writeExperimentResults(dir / "turning", turning, runs)));
+  EXPECT_EQ(doc_turning["spec"]["predict_turning"], turning.control.staa.predict_turning);
 
   const ExperimentPlots plots = writeExperimentPlots(dir, spec, runs);
   const std::string svg = readFile(dir / "scores.svg");
@@ -468,6 +473,7 @@ TEST(StaaSimExperiment, SmallExperimentExitsZeroWithResultsAndFigure) {
   ASSERT_EQ(e.code, 0) << e.err;
   const Json doc = Json::parse(readFile(dir / "out" / "results.json"));
   EXPECT_EQ(doc["runs"].size(), 2U);
+  EXPECT_EQ(doc["spec"]["predict_turning"], StaaConfig{}.predict_turning);  // the default, recorded
   EXPECT_TRUE(fs::exists(dir / "out" / "scores.svg"));
   EXPECT_THAT(e.out, HasSubstr("clutter"));
   EXPECT_THAT(e.out, HasSubstr("score"));
@@ -505,7 +511,8 @@ TEST(StaaSimExperiment, BadInputExitsTwoNamingTheOptionAndValue) {
                                          {"--runs -1", "--runs", "'-1'"},
                                          {"--jobs 0", "--jobs", "'0'"},
                                          {"--maps clutter,no-such-map.yaml", "--maps", "no-such-map.yaml"},
-                                         {"--budget-ms 5 --budget-expansions 100", "--budget-ms", "exclude"}}) {
+                                         {"--budget-ms 5 --budget-expansions 100", "--budget-ms", "exclude"},
+                                         {"--predict-turning yes", "--predict-turning", "'yes'"}}) {
     const Exit e = runSim("experiment " + c.args + out, dir);
     EXPECT_EQ(e.code, 2) << c.args << ": " << e.err;
     EXPECT_THAT(e.err, HasSubstr(c.option)) << c.args;
