@@ -276,7 +276,11 @@ bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleS
       }
       if (overlaps(scratch_)) return false;
     }
-    if (turning && obstacles.turnRate(k) != 0.0) {
+    // On its circle the obstacle's centre stays within the distance it has travelled of where
+    // it was seen (a chord is no longer than its arc): far ones are skipped unpredicted.
+    const Vec2 seen_center = 0.5 * (o.box.min + o.box.max);
+    const double circle_reach = shift.norm() + r + circumradius_ + 2.0 * dynamic_margin_;
+    if (turning && obstacles.turnRate(k) != 0.0 && (seen_center - p).squaredNorm() <= circle_reach * circle_reach) {
       obstacles.predictTurning(k, t, scratch_);
       const Vec2 turned_center = 0.5 * (scratch_.box.min + scratch_.box.max);
       const double turned_reach = 0.5 * (scratch_.box.max - scratch_.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
