@@ -21,6 +21,10 @@ struct ObstacleFrame {
     std::array<Vec2, kMaxVertices> vertices{};
     std::size_t n = 0;
     Vec2 velocity{0.0, 0.0};
+    // How fast the velocity turns (rad/s, counter-clockwise positive): the planner also
+    // predicts the obstacle along that circle (StaaConfig::predict_turning). 0: going
+    // straight, or not known.
+    double turn_rate = 0.0;
   };
   rt::Nanos stamp = -1;          // when the frame was taken; < 0: never
   std::uint64_t sequence = 0;

@@ -44,6 +44,20 @@ void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, doub
   if (speed > config_.max_speed_mps) tr.velocity *= config_.max_speed_mps / speed;
 }
 
+// The turn rate: how far the filtered velocity's direction turned over dt, smoothed with a
+// first-order filter of time constant turn_rate_time_s. A slow track's direction is mostly
+// the centroid's noise: its turn rate is 0.
+void DepthObstacleDetector::filterTurnRate(Track& tr, const Vec2& before, double dt) const {
+  const double slow = config_.turn_min_speed_mps;
+  if (!(dt > 0.0) || before.norm() < slow || tr.velocity.norm() < slow) {
+    tr.turn_rate = 0.0;
+    return;
+  }
+  const double measured = std::atan2(cross(before, tr.velocity), before.dot(tr.velocity)) / dt;
+  tr.turn_rate += dt / (config_.turn_rate_time_s + dt) * (measured - tr.turn_rate);
+  tr.turn_rate = std::clamp(tr.turn_rate, -config_.max_turn_rate_rps, config_.max_turn_rate_rps);
+}
+
 void validateDepthObstaclesConfig(const DepthObstaclesConfig& c) {
   if (c.pixel_stride < 1 || c.pixel_stride > 16) bad("pixel_stride", c.pixel_stride, "in 1..16");
   if (!(c.min_depth_m >= 0.0) || !std::isfinite(c.min_depth_m)) bad("min_depth_m", c.min_depth_m, "finite and >= 0 (m)");
@@ -71,6 +85,13 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c) {
   if (!finitePositive(c.centroid_noise_m)) bad("centroid_noise_m", c.centroid_noise_m, "finite and > 0 (m)");
   if (!finitePositive(c.acceleration_mps2)) bad("acceleration_mps2", c.acceleration_mps2, "finite and > 0 (m/s^2)");
   if (!finitePositive(c.max_speed_mps)) bad("max_speed_mps", c.max_speed_mps, "finite and > 0 (m/s)");
+  if (!finitePositive(c.turn_rate_time_s)) bad("turn_rate_time_s", c.turn_rate_time_s, "finite and > 0 (s)");
+  if (!(c.turn_min_speed_mps >= 0.0) || !std::isfinite(c.turn_min_speed_mps)) {
+    bad("turn_min_speed_mps", c.turn_min_speed_mps, "finite and >= 0 (m/s)");
+  }
+  if (!(c.max_turn_rate_rps >= 0.0) || !std::isfinite(c.max_turn_rate_rps)) {
+    bad("max_turn_rate_rps", c.max_turn_rate_rps, "finite and >= 0 (rad/s)");
+  }
   if (c.max_missed_frames < 0) bad("max_missed_frames", c.max_missed_frames, ">= 0");
   if (!finitePositive(c.max_frame_gap_s)) bad("max_frame_gap_s", c.max_frame_gap_s, "finite and > 0 (s)");
 }
@@ -269,6 +290,7 @@ void DepthObstacleDetector::outlineClusters(hal::ObstacleFrame& out) {
     hal::ObstacleFrame::Obstacle& o = out.obstacles[out.count++];
     o.n = outline(clusters_[order_[i]], o.vertices);
     o.velocity = Vec2::Zero();
+    o.turn_rate = 0.0;
   }
 }
 
@@ -346,7 +368,10 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
     Track& tr = tracks_[best_t];
     taken[best_t] = true;
     cl.track = static_cast<int>(best_t);
-    filterCentroid(tr, cl.centroid, static_cast<double>(stamp - tr.seen) * 1e-9);
+    const double dt = static_cast<double>(stamp - tr.seen) * 1e-9;
+    const Vec2 velocity_before = tr.velocity;
+    filterCentroid(tr, cl.centroid, dt);
+    filterTurnRate(tr, velocity_before, dt);
     tr.seen = stamp;
     tr.missed = 0;
   }
@@ -360,6 +385,7 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
     Cluster& cl = clusters_[order_[i]];
     if (cl.track >= 0) {
       out.obstacles[i].velocity = tracks_[static_cast<std::size_t>(cl.track)].velocity;
+      out.obstacles[i].turn_rate = tracks_[static_cast<std::size_t>(cl.track)].turn_rate;
       continue;
     }
     for (std::size_t t = 0; t < kMaxTracks; ++t) {
@@ -372,6 +398,7 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
       break;
     }
     out.obstacles[i].velocity = Vec2::Zero();
+    out.obstacles[i].turn_rate = 0.0;
   }
 }
 

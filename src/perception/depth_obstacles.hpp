@@ -17,7 +17,8 @@
 //   4. trackClusters:   each cluster is matched to the nearest predicted track within a gate;
 //                       a constant-velocity Kalman filter on its point centroid gives the
 //                       velocity (the smoothed displacement over the time between frames); a
-//                       new track starts at 0 m/s.
+//                       new track starts at 0 m/s. The turn rate is the smoothed rate at
+//                       which that velocity's direction turns (0 for slow tracks).
 //
 // Everything is sized at construction (the PerceptionWorkspace of STYLE.md is this object);
 // process() allocates nothing, throws nothing and takes time linear in the sampled pixels and
@@ -81,6 +82,13 @@ struct DepthObstaclesConfig {
   double acceleration_mps2 = 1.0;
   // Speeds are clamped to this (m/s): faster is an association slip, not a person.
   double max_speed_mps = 2.5;
+  // The turn rate (the planner predicts a turning obstacle on its circle as well as on its
+  // line): the rate at which the filtered velocity's direction turns, smoothed with this time
+  // constant (s), while the track is at least turn_min_speed_mps fast (slower, the direction
+  // is noise and the turn rate 0), clamped to +-max_turn_rate_rps (people: up to ~3 rad/s).
+  double turn_rate_time_s = 0.3;
+  double turn_min_speed_mps = 0.3;
+  double max_turn_rate_rps = 3.0;
   // A track unseen for more frames than this is forgotten.
   int max_missed_frames = 5;
   // A gap between frame stamps longer than this (or a stamp going backwards) forgets every
@@ -146,6 +154,7 @@ class DepthObstacleDetector {
     double p00 = 0.0, p01 = 0.0, p11 = 0.0;
     rt::Nanos seen = 0;
     int missed = 0;
+    double turn_rate = 0.0;  // rad/s, counter-clockwise positive
   };
 
   void backProject(const hal::DepthFrame& frame, const Pose2& robot, DepthObstaclesStats& stats);
@@ -154,6 +163,7 @@ class DepthObstacleDetector {
   void trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out);
   std::size_t outline(const Cluster& cluster, std::span<Vec2> out);
   void filterCentroid(Track& track, const Vec2& measured, double dt) const;
+  void filterTurnRate(Track& track, const Vec2& velocity_before, double dt) const;
 
   DepthObstaclesConfig config_;
   CameraModel camera_;

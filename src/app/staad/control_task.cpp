@@ -142,9 +142,11 @@ void ControlTask::takeInputs() {
       const hal::ObstacleFrame::Obstacle& o = frame.obstacles[i];
       views_[i] = PolygonView(o.vertices.data(), std::min(o.n, hal::ObstacleFrame::kMaxVertices));
       velocities_[i] = o.velocity;
+      turn_rates_[i] = o.turn_rate;
     }
     // set() copies (hulls) the polygons: the views may dangle after the next update().
-    obstacles_.set(std::span<const PolygonView>(views_.data(), n), std::span<const Vec2>(velocities_.data(), n));
+    obstacles_.set(std::span<const PolygonView>(views_.data(), n), std::span<const Vec2>(velocities_.data(), n),
+                   std::span<const double>(turn_rates_.data(), n));
     obstacles_stamp_ = frame.stamp;
   }
 }

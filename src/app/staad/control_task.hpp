@@ -57,6 +57,8 @@ class ControlTask {
   std::uint64_t cycles() const { return cycles_; }
   rt::Nanos period() const { return period_; }
   ControlCycle& controlCycle() { return cycle_; }
+  // The moving obstacles the last cycle planned against (the latest obstacle frame's).
+  const DynamicObstacleSet& obstacles() const { return obstacles_; }
 
  private:
   void takeRequests(rt::Nanos now);
@@ -81,6 +83,7 @@ class ControlTask {
   DynamicObstacleSet obstacles_;
   std::array<PolygonView, hal::ObstacleFrame::kMaxObstacles> views_{};
   std::array<Vec2, hal::ObstacleFrame::kMaxObstacles> velocities_{};
+  std::array<double, hal::ObstacleFrame::kMaxObstacles> turn_rates_{};
 
   // Inputs as last taken.
   BaseSample base_;

@@ -1,6 +1,7 @@
 // Depth perception on frames of the simulated camera in the office map's corridor: a walking
 // box becomes one obstacle where it is, moving as it moves; walls, doors and the floor do not;
-// the robot's own motion gives standing things no velocity; the nearest 32 obstacles are kept.
+// the robot's own motion gives standing things no velocity; a box walking a circle turns at
+// its rate, one walking straight does not; the nearest 32 obstacles are kept.
 #include "perception/depth_obstacles.hpp"
 
 #include "geometry/convex.hpp"
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -108,8 +110,9 @@ void expectMoverSeen(const hal::CameraMount& mount, const char* name) {
     for (std::size_t i = 0; i < o.n; ++i) EXPECT_LE(distanceTo(o.vertices[i], truth), 0.15);
     EXPECT_LE(distanceTo(Vec2(centre.x() - 0.2, centre.y()), view(o)), 0.15);
     EXPECT_NEAR(centroidOf(view(o)).y(), centre.y(), 0.15);
-    // Its velocity: 0.5 m/s along +y.
+    // Its velocity: 0.5 m/s along +y, not turning.
     EXPECT_LE((o.velocity - Vec2(0.0, 0.5)).norm(), 0.15) << o.velocity.transpose();
+    EXPECT_LE(std::abs(o.turn_rate), 0.3);
     // The corridor's walls were in view and explained by the map.
     EXPECT_GT(run.stats.map_cells, 20u);
   }
@@ -174,6 +177,41 @@ TEST(DepthObstacles, RobotDrivingPastAStandingBoxGivesItNoVelocity) {
   EXPECT_GT(run.world.robot().pose.x, 4.5 + 0.3);  // it really drove
 }
 
+// A box walking a circle of radius 0.8 m at 0.8 m/s (1 rad/s) in the corridor ahead, first
+// counter-clockwise, then back clockwise: the turn rate follows, its sign with it.
+TEST(DepthObstacles, ABoxWalkingACircleTurnsAtItsRate) {
+  const Vec2 centre(7.3, 4.5);
+  const double radius = 0.8, speed = 0.8;
+  std::vector<Vec2> circle;
+  for (int k = 0; k <= 72; ++k) {
+    const double a = -kPi / 2.0 + 2.0 * kPi * k / 72.0;  // from the circle's south point
+    circle.push_back(centre + radius * Vec2(std::cos(a), std::sin(a)));
+  }
+  CorridorRun run(test::levelMount(), {Mover{test::square(0.2), circle, speed}});
+  const double lap = 2.0 * kPi * radius / speed;  // 6.3 s, then the way back
+  const int frames = static_cast<int>(2.0 * lap * 30.0);
+  int checked_ccw = 0, checked_cw = 0;
+  double worst = 0.0;
+  for (int k = 1; k <= frames; ++k) {
+    run.step();
+    const double t = k * kDt;
+    // The velocity and its direction settle first (a new track starts at rest); around the
+    // lap's end the mover reverses (a standstill, the turn rate resets).
+    const bool ccw = t > 1.5 && t < lap - 0.3, cw = t > lap + 1.5 && t < 2.0 * lap - 0.3;
+    if (!ccw && !cw) continue;
+    SCOPED_TRACE("frame " + std::to_string(k));
+    ASSERT_EQ(run.obstacles.count, 1u) << describe(run.obstacles);
+    const double expected = (ccw ? 1.0 : -1.0) * speed / radius;
+    const double got = run.obstacles.obstacles[0].turn_rate;
+    EXPECT_NEAR(got, expected, 0.35);
+    worst = std::max(worst, std::abs(got - expected));
+    (ccw ? checked_ccw : checked_cw) += 1;
+  }
+  EXPECT_GT(checked_ccw, 100);
+  EXPECT_GT(checked_cw, 100);
+  std::printf("circle walker: largest turn rate error %.2f rad/s of 1 rad/s\n", worst);
+}
+
 TEST(DepthObstacles, AStampGapForgetsTheTracks) {
   CorridorRun run(test::levelMount(), {test::boxMover({6.5, 3.9}, {6.5, 5.1}, 0.5)});
   for (int k = 1; k <= 15; ++k) run.step();
@@ -184,6 +222,7 @@ TEST(DepthObstacles, AStampGapForgetsTheTracks) {
   run.detector.process(*run.frame, run.world.robot().pose, run.obstacles);
   ASSERT_EQ(run.obstacles.count, 1u);
   EXPECT_EQ(run.obstacles.obstacles[0].velocity, Vec2(0.0, 0.0));
+  EXPECT_EQ(run.obstacles.obstacles[0].turn_rate, 0.0);
   EXPECT_EQ(run.obstacles.stamp, run.frame->stamp);
 }
 
@@ -275,6 +314,23 @@ TEST(DepthObstacles, RejectsABadConfigNamingTheField) {
   c.max_height_m = 0.0;
   EXPECT_THROW(DepthObstacleDetector(test::officeMap(), hal::CameraIntrinsics{}, test::levelMount(), c),
                std::invalid_argument);
+  const auto rejects = [](const DepthObstaclesConfig& bad, const char* field) {
+    try {
+      validateDepthObstaclesConfig(bad);
+      ADD_FAILURE() << field << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  c = DepthObstaclesConfig{};
+  c.turn_rate_time_s = 0.0;
+  rejects(c, "turn_rate_time_s");
+  c = DepthObstaclesConfig{};
+  c.turn_min_speed_mps = -0.1;
+  rejects(c, "turn_min_speed_mps");
+  c = DepthObstaclesConfig{};
+  c.max_turn_rate_rps = std::numeric_limits<double>::quiet_NaN();
+  rejects(c, "max_turn_rate_rps");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "app/staad/io_tasks.hpp"
 #include "app/staad/run_picture.hpp"
 #include "app/staad/telemetry.hpp"
+#include "geometry/polygon.hpp"
 #include "hal/mock/mock_hal.hpp"
 #include "map/polygon_map.hpp"
 #include "rt/alloc_count.hpp"
@@ -284,6 +285,43 @@ TEST(ControlTask, StaleObstacleFramesBrakeAndRecover) {
   ls.steps(2);
   EXPECT_EQ(ls.task.fault(), FaultKind::kNone);
   EXPECT_EQ(ls.task.state(), DaemonState::kDriving);
+}
+
+// The obstacle frame's polygons, velocities and turn rates are what the planner gets.
+TEST(ControlTask, PlansAgainstTheObstacleFramesPolygonsVelocitiesAndTurnRates) {
+  Lockstep ls(officeConfig());
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(3);
+  EXPECT_EQ(ls.task.obstacles().size(), 0u);  // the mock camera sees nothing
+  hal::ObstacleFrame frame;
+  frame.count = 2;
+  const Vec2 centres[2] = {{7.5, 4.0}, {6.0, 5.2}};
+  for (std::size_t i = 0; i < 2; ++i) {
+    hal::ObstacleFrame::Obstacle& o = frame.obstacles[i];
+    o.n = 4;
+    o.vertices = {};
+    o.vertices[0] = centres[i] + Vec2(-0.2, -0.2);
+    o.vertices[1] = centres[i] + Vec2(0.2, -0.2);
+    o.vertices[2] = centres[i] + Vec2(0.2, 0.2);
+    o.vertices[3] = centres[i] + Vec2(-0.2, 0.2);
+  }
+  frame.obstacles[0].velocity = {-0.6, 0.2};
+  frame.obstacles[0].turn_rate = 1.2;
+  frame.obstacles[1].velocity = {0.3, 0.0};
+  frame.obstacles[1].turn_rate = -0.4;
+  ls.sensor.push(frame);
+  ls.step();
+  const DynamicObstacleSet& seen = ls.task.obstacles();
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen.velocity(0), Vec2(-0.6, 0.2));
+  EXPECT_EQ(seen.turnRate(0), 1.2);
+  EXPECT_EQ(seen.velocity(1), Vec2(0.3, 0.0));
+  EXPECT_EQ(seen.turnRate(1), -0.4);
+  const Box box = boundingBox(seen.observed(0).view());
+  EXPECT_NEAR(box.min.x(), 7.3, 1e-9);
+  EXPECT_NEAR(box.max.y(), 4.2, 1e-9);
+  ls.step();  // the mock's next frame is empty: nothing left to avoid
+  EXPECT_EQ(ls.task.obstacles().size(), 0u);
 }
 
 TEST(ControlTask, BaseFaultBrakesAndClearsWithTheFault) {
