@@ -173,6 +173,7 @@ DwaController::Evaluation DwaController::evaluate(const LocalContext& ctx, doubl
   // At the goal its heading weighs more the closer the robot is, so that the position comes
   // first (arrival wants 0.2 m) and the turn on the spot last.
   const double heading = (aim ? std::abs(wrapAngle(s.theta - target)) / kPi : 0.0) * (at_goal_ ? goal_closeness_ : 1.0);
+  e.heading = heading;
   e.cost = -config_.w_progress * progress + config_.w_heading * heading + config_.w_path * end.lateral +
            config_.w_grid * grid + config_.w_geometric * proximity +
            (v < 0.0 && !at_goal_ ? config_.backwards_penalty * (-v) / std::max(1e-6, -limits_.v_min) : 0.0) +
@@ -213,6 +214,8 @@ LocalCommand DwaController::compute(const LocalContext& ctx) {
   const std::size_t nv = notchesOf(v_lo, v_hi, vs), nw = notchesOf(w_lo, w_hi, ws);
 
   double best = std::numeric_limits<double>::infinity();
+  // Among the turns on the spot (v target 0): the one facing the carrot best, and staying.
+  double turn_heading = std::numeric_limits<double>::infinity(), turn_w = 0.0, best_heading = 1.0;
   for (std::size_t i = 0; i < nv; ++i) {
     for (std::size_t j = 0; j < nw; ++j) {
       ++stats_.samples;
@@ -223,6 +226,12 @@ LocalCommand DwaController::compute(const LocalContext& ctx) {
         best = e.cost;
         stats_.best_v = vs[i];
         stats_.best_w = ws[j];
+        best_heading = e.heading;
+      }
+      if (vs[i] != 0.0) continue;
+      if (e.heading < turn_heading) {
+        turn_heading = e.heading;
+        turn_w = ws[j];
       }
     }
   }
@@ -231,6 +240,15 @@ LocalCommand DwaController::compute(const LocalContext& ctx) {
     return brake;
   }
   stats_.best_cost = best;
+  // A local minimum (turn_when_stuck): not driving, away from the goal, the best target does
+  // not drive either, and a turn on the spot faces the carrot better (by more than 2 degrees:
+  // no dithering). Not only at a standstill: the turn must go on in the next cycles.
+  constexpr double kAtRest = 0.05, kBetter = 2.0 / 180.0;
+  if (config_.turn_when_stuck && !at_goal_ && stats_.best_v == 0.0 && std::abs(r.v) < kAtRest &&
+      turn_heading < best_heading - kBetter) {
+    stats_.stuck_turn = true;
+    stats_.best_w = turn_w;
+  }
   LocalCommand cmd;
   cmd.v = std::clamp(r.v + std::clamp(stats_.best_v - r.v, -limits_.a_max * period, limits_.a_max * period),
                      limits_.v_min, limits_.v_max);

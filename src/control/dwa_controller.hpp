@@ -66,6 +66,13 @@ struct DwaConfig {
   double goal_decel_ratio = 0.6;     // slow down for the goal at this share of a_max
   double goal_slack_m = 0.05;        // ... so as to stand this short of it
   double creep_mps = 0.15;           // ... but never capped below this (arrival is at |v| <= 0.25)
+  // A robot at rest whose best target is to stay at rest, away from the goal, is in a local
+  // minimum of the cost when a turn on the spot would face the carrot better: found in the
+  // depot map, where turning round after a goal brings a corner of the 0.8 m footprint within
+  // 0.25 m of a post (the proximity term) before the heading term gains enough, and the agent
+  // stood for the rest of the run (1 goal in 60 s; PD: 10). Then the admissible turn on the
+  // spot that faces the carrot best is taken (collisions and the stop are still checked).
+  bool turn_when_stuck = true;
 };
 
 class DwaController : public LocalController {
@@ -82,6 +89,7 @@ class DwaController : public LocalController {
     std::size_t samples = 0;     // (v, w) targets evaluated
     std::size_t admissible = 0;  // of them free of C and D(t) (and able to stop)
     bool braking = false;        // none was: braked at the limits
+    bool stuck_turn = false;     // at rest in a local minimum: turning on the spot (turn_when_stuck)
     double best_v = 0.0, best_w = 0.0;  // the chosen target (before the per-period step)
     double best_cost = 0.0;
     Vec2 carrot{0.0, 0.0};
@@ -117,6 +125,7 @@ class DwaController : public LocalController {
   struct Evaluation {
     bool admissible = false;
     double cost = 0.0;
+    double heading = 1.0;  // the heading term (0..1: the error to the carrot at the arc's end / pi)
     ArcCheck arc;
   };
   Evaluation evaluate(const LocalContext& context, double v, double w) const;

@@ -95,6 +95,31 @@ TEST(DwaController, AtSpeedBeforeAWallNeverPicksAnArcThatHitsIt) {
   EXPECT_GT(world.minClearance(), 0.0);
 }
 
+TEST(DwaController, AtRestInALocalMinimumTurnsOnTheSpotTowardsTheCarrot) {
+  // The depot's posts (see TurnsRoundByAPost... below): the goal behind to the right.
+  const std::vector<Polygon> posts = {test::box(22.35, 11.25, 22.9, 11.75), test::box(21.6, 13.0, 21.75, 13.1)};
+  Picture pic({22.10, 12.38, 0.27, 0.0, 0.0}, {16.75, 1.0, 0.0}, posts);
+  DwaConfig plain;
+  plain.turn_when_stuck = false;
+  DwaController stuck(pic.robot, pic.local, plain);
+  const LocalCommand stay = stuck.compute(pic.ctx);
+  EXPECT_EQ(stuck.stats().best_v, 0.0);
+  EXPECT_EQ(stuck.stats().best_w, 0.0);
+  EXPECT_EQ(stay.v, 0.0);
+  EXPECT_EQ(stay.w, 0.0);
+
+  DwaController dwa(pic.robot, pic.local);
+  const LocalCommand turn = dwa.compute(pic.ctx);
+  EXPECT_TRUE(dwa.stats().stuck_turn);
+  EXPECT_EQ(turn.v, 0.0);
+  EXPECT_NEAR(turn.w, -6.0 / 30.0, 1e-9);  // clockwise, the shorter way, at b_max
+  EXPECT_LT(dwa.stats().best_w, -1.0);
+  // Anywhere with a way forward the rule stays out of it.
+  Picture open({0.0, 0.0, 0.0, 0.0, 0.0}, {10.0, 0.0, 0.0}, {});
+  dwa.compute(open.ctx);
+  EXPECT_FALSE(dwa.stats().stuck_turn);
+}
+
 TEST(DwaController, CornersWithoutARouteBrakeAtTheLimits) {
   // Walls all around, 0.1 m from the front: at 1 m/s the robot cannot stop before the wall
   // (0.25 m of braking), so every sample collides: it brakes at the limits.
@@ -196,6 +221,30 @@ TEST(DwaScenario, OpenSpace) {
 
 TEST(DwaScenario, ThroughADoorWithANinetyDegreeTurn) {
   const Scenario s = test::doorTurn();
+  const DwaRun run = drive(s, 20.0);
+  expectArrived(run.result, s, 12.0);
+  EXPECT_GT(run.result.min_clearance_m, 0.0);
+}
+
+// Turning round by a post (the depot map, where the DWA stood for the rest of a run): the
+// agent (0.8 m long) stands 0.7 m from two posts, the goal behind it. Every turn on the spot
+// first brings a corner within static_range_m of the lower post, and within the 0.7 s
+// horizon the proximity costs more than the heading gains: staying is the cost's minimum.
+Scenario turnRoundByAPost() {
+  Scenario s = test::baseScenario("post", Box{{10, 0}, {25, 15}});
+  s.map.obstacles = {test::box(22.35, 11.25, 22.9, 11.75), test::box(21.6, 13.0, 21.75, 13.1)};
+  s.start = {22.10, 12.38, 0.27};
+  s.goal = {16.75, 1.0, 0.0};
+  return s;
+}
+
+TEST(DwaScenario, TurnsRoundByAPostInsteadOfStandingInALocalMinimum) {
+  const Scenario s = turnRoundByAPost();
+  DwaConfig plain;
+  plain.turn_when_stuck = false;
+  const DwaRun stuck = drive(s, 10.0, plain);
+  EXPECT_FALSE(stuck.result.reached_goal);  // the local minimum is real
+  EXPECT_LT((stuck.result.final_pose.position() - s.start.position()).norm(), 0.1);
   const DwaRun run = drive(s, 20.0);
   expectArrived(run.result, s, 12.0);
   EXPECT_GT(run.result.min_clearance_m, 0.0);
