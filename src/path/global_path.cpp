@@ -3,6 +3,7 @@
 #include "geometry/clipper_ops.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace staa {
 
@@ -42,6 +43,10 @@ GlobalPathPlanner::GlobalPathPlanner(const PolygonMap& map, const GlobalPathOpti
   real_set_.assign(std::span<const Polygon>(real_), PolygonSet::Options{options.search.grid_cell_m});
   static_search_.setStaticObstacles(inflated_);
   dynamic_search_.setStaticObstacles(inflated_);
+  // A path has at most every node of the search and its two moved ends, plus the start.
+  std::size_t vertices = 0;
+  for (const Polygon& p : inflated_) vertices += p.size();
+  nudged_path_.reserve(vertices + options.search.max_dynamic_vertices + 5);
 }
 
 bool GlobalPathPlanner::insideRealObstacle(const Vec2& p) const {
@@ -88,10 +93,51 @@ GlobalPath GlobalPathPlanner::run(MinimalConstruct& search, const Vec2& start, c
     out.status = PathStatus::kGoalInObstacle;
     return out;
   }
-  const MinimalConstruct::Result r = search.query(start, goal, with_dynamic, deadline);
-  out.expansions = r.expansions;
-  out.edge_checks = r.edge_checks;
-  out.start_moved = r.start_moved;
+  MinimalConstruct::Result r = search.query(start, goal, with_dynamic, deadline);
+  std::uint32_t expansions = r.expansions, edge_checks = r.edge_checks;
+  bool nudged = false;
+  // A start inside M' (M' is grown by the circumradius: the robot's centre may well be inside
+  // it where its footprint is free) goes to the nearest free point, and that point may lie in
+  // a sliver of M''s free space cut off from the rest, where inflated obstacles nearly meet.
+  // The robot would be told there is no path and stop for good, though it could drive out
+  // (found in the depot map: two agents held there for the rest of a 300 s run). Then starts
+  // around the robot are tried, nearest ring first, out to the inflation radius: the first
+  // with a path gives it, the robot's own position put in front. Only the static search: a
+  // dynamic search that fails falls back to the static path anyway.
+  if (options_.nudge_start && r.status == MinimalConstruct::Status::kNoPath && r.start_moved && !with_dynamic) {
+    constexpr int kDirections = 8;
+    constexpr double kRing = 0.1;
+    const int rings = static_cast<int>(std::ceil(options_.inflation_radius_m / kRing - 1e-9));
+    for (int ring = 1; ring <= rings && !nudged && r.status != MinimalConstruct::Status::kAborted; ++ring) {
+      const double d = std::min(ring * kRing, options_.inflation_radius_m);
+      for (int k = 0; k < kDirections; ++k) {
+        const double a = 2.0 * kPi * k / kDirections;
+        const Vec2 q = start + d * Vec2(std::cos(a), std::sin(a));
+        if (insideRealObstacle(q)) continue;
+        const MinimalConstruct::Result rq = search.query(q, goal, false, deadline);
+        expansions += rq.expansions;
+        edge_checks += rq.edge_checks;
+        if (rq.status == MinimalConstruct::Status::kFound || rq.status == MinimalConstruct::Status::kAborted) {
+          r = rq;
+          nudged = rq.status == MinimalConstruct::Status::kFound;
+          break;
+        }
+      }
+    }
+  }
+  if (nudged && r.path.size() + 1 <= nudged_path_.capacity()) {
+    // Within the capacity reserved at construction: no allocation. (A longer path goes
+    // without the robot's position in front; it starts within the inflation radius of it.)
+    nudged_path_.clear();
+    nudged_path_.push_back(start);
+    nudged_path_.insert(nudged_path_.end(), r.path.begin(), r.path.end());
+    r.length += (r.path.front() - start).norm();
+    r.path = nudged_path_;
+  }
+  out.expansions = expansions;
+  out.edge_checks = edge_checks;
+  out.start_moved = r.start_moved || nudged;
+  out.start_nudged = nudged;
   out.goal_moved = r.goal_moved;
   switch (r.status) {
     case MinimalConstruct::Status::kFound:

@@ -18,6 +18,9 @@ struct GlobalPathOptions {
   // plus this tolerance, so that they contain the exact inflated shape (chords lie inside an
   // arc). Coarser is faster (fewer corners): 3 cm keeps a 90-degree corner to 3 vertices.
   double arc_tolerance_m = 0.03;
+  // A start inside M' whose nearest free point has no path tries points around it, out to
+  // the inflation radius (see GlobalPathPlanner::run). Off: such a start is kNoPath.
+  bool nudge_start = true;
   MinimalConstruct::Options search;
 };
 
@@ -38,6 +41,9 @@ struct GlobalPath {
   double length = 0.0;
   bool dynamic = false;        // found in M' ∪ D' (false: static, or the static fallback)
   bool start_moved = false;
+  // The nearest free point to the start had no path; one from a point around the start had
+  // (GlobalPathPlanner::run): the path runs from the start through that point.
+  bool start_nudged = false;
   bool goal_moved = false;
   std::uint32_t expansions = 0;
   std::uint32_t edge_checks = 0;
@@ -80,6 +86,7 @@ class GlobalPathPlanner {
   // dynamic one is rebuilt whenever D' changes, so it must not wipe the static tree.
   MinimalConstruct static_search_;
   MinimalConstruct dynamic_search_;
+  std::vector<Vec2> nudged_path_;  // a nudged start's path with the start in front (reserved)
 };
 
 // Walls standing for "outside the bounds is blocked": four slabs of `thickness` around the box.

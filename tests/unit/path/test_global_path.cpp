@@ -60,6 +60,57 @@ TEST(GlobalPath, GoalInsideARealObstacleIsAnErrorGoalNearAWallIsMoved) {
   EXPECT_NEAR(p.path[p.path.size() - 2].x(), 8.0 - 0.3, 0.04);
 }
 
+// Three posts whose inflated shapes close the gaps between them but leave a small hole in
+// the middle: M''s free space there is a sliver cut off from the rest. A robot centre inside
+// M' next to the hole (its nearest free point in the hole) still gets its path out.
+TEST(GlobalPath, AStartWhoseNearestFreePointIsACutOffSliverGetsThePathFromAroundIt) {
+  const Vec2 c(5.0, 2.0);
+  const auto post = [](const Vec2& p) {
+    return Polygon{p + Vec2(-0.05, -0.05), p + Vec2(0.05, -0.05), p + Vec2(0.05, 0.05), p + Vec2(-0.05, 0.05)};
+  };
+  PolygonMap m;
+  m.name = "posts";
+  m.bounds = Box{{0, 0}, {10, 5}};
+  m.obstacles = {post(c + Vec2(-0.51, -0.2945)), post(c + Vec2(0.51, -0.2945)), post(c + Vec2(0.0, 0.589))};
+  GlobalPathOptions opt;
+  opt.inflation_radius_m = 0.472;  // the paper agent's circumradius
+  GlobalPathPlanner planner(m, opt);
+  const Vec2 goal(1.0, 1.0);
+  // The hole is free and cut off: from its middle there is no path (M' says so, and rightly
+  // for a robot of that radius).
+  const GlobalPath inside = planner.plan(c, goal);
+  EXPECT_EQ(inside.status, PathStatus::kNoPath);
+  EXPECT_FALSE(inside.start_moved);
+  // Just below the hole: inside M', its nearest free point in the hole. Without trying
+  // the points around it: no path.
+  const Vec2 start = c + Vec2(0.0, -0.13);
+  GlobalPathOptions plain = opt;
+  plain.nudge_start = false;
+  GlobalPathPlanner stuck(m, plain);
+  const GlobalPath none = stuck.plan(start, goal);
+  EXPECT_EQ(none.status, PathStatus::kNoPath);
+  EXPECT_TRUE(none.start_moved);
+  const GlobalPath out = planner.plan(start, goal);
+  ASSERT_EQ(out.status, PathStatus::kFound);
+  EXPECT_TRUE(out.start_moved);
+  EXPECT_TRUE(out.start_nudged);
+  ASSERT_GE(out.path.size(), 2u);
+  EXPECT_EQ(out.path.front(), start);
+  EXPECT_EQ(out.path.back(), goal);
+  // Out from a point within the inflation radius, then (nearly) straight to the goal.
+  EXPECT_LE((out.path[1] - start).norm(), 0.472 + 1e-9);
+  double length = 0.0;
+  for (std::size_t i = 1; i < out.path.size(); ++i) length += (out.path[i] - out.path[i - 1]).norm();
+  EXPECT_NEAR(out.length, length, 1e-9);
+  EXPECT_GE(out.length, (goal - start).norm() - 1e-9);
+  EXPECT_LE(out.length, (goal - start).norm() + 0.8);  // out of the posts first
+  // Far from the posts nothing changes: the start is free, not nudged.
+  const GlobalPath free_start = planner.plan({8.0, 4.0}, goal);
+  ASSERT_EQ(free_start.status, PathStatus::kFound);
+  EXPECT_FALSE(free_start.start_nudged);
+  EXPECT_EQ(free_start.path.front(), Vec2(8.0, 4.0));
+}
+
 TEST(GlobalPath, PersonInTheDoorFallsBackToTheStaticPath) {
   GlobalPathPlanner planner(twoRooms(), GlobalPathOptions{});
   // An inflated person filling the door.
