@@ -33,5 +33,35 @@ TEST(PathAllocations, WarmQueriesAllocateNothing) {
   EXPECT_GT(found, 100);
 }
 
+// A start inside M' whose nearest free point is cut off (three posts around a hole, as in
+// GlobalPath.AStartWhoseNearestFreePointIsACutOffSliverGetsThePathFromAroundIt): the queries
+// around it and the path with the start in front allocate nothing either.
+TEST(PathAllocations, NudgedStartsAllocateNothing) {
+  const Vec2 c(5.0, 2.0);
+  const auto post = [](const Vec2& p) {
+    return Polygon{p + Vec2(-0.05, -0.05), p + Vec2(0.05, -0.05), p + Vec2(0.05, 0.05), p + Vec2(-0.05, 0.05)};
+  };
+  PolygonMap map;
+  map.bounds = Box{{0, 0}, {10, 5}};
+  map.obstacles = {post(c + Vec2(-0.51, -0.2945)), post(c + Vec2(0.51, -0.2945)), post(c + Vec2(0.0, 0.589))};
+  GlobalPathOptions options;
+  options.inflation_radius_m = 0.472;
+  GlobalPathPlanner planner(map, options);
+  const Vec2 starts[2] = {c + Vec2(0.0, -0.13), c + Vec2(0.0, -0.125)};
+  const Vec2 goals[2] = {{1.0, 1.0}, {9.0, 4.0}};
+  for (const Vec2& g : goals) {
+    for (const Vec2& s : starts) planner.plan(s, g);
+  }
+  int nudged = 0;
+  test::AllocationScope scope;
+  for (int round = 0; round < 3; ++round) {
+    for (const Vec2& g : goals) {
+      for (const Vec2& s : starts) nudged += planner.plan(s, g).start_nudged ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(scope.count(), 0u);
+  EXPECT_GE(nudged, 6);
+}
+
 }  // namespace
 }  // namespace staa
