@@ -6,6 +6,7 @@
 
 #include <random>
 
+#include "posts_scene.hpp"
 #include "visibility_reference.hpp"
 
 #include <gtest/gtest.h>
@@ -65,13 +66,7 @@ TEST(GlobalPath, GoalInsideARealObstacleIsAnErrorGoalNearAWallIsMoved) {
 // M' next to the hole (its nearest free point in the hole) still gets its path out.
 TEST(GlobalPath, AStartWhoseNearestFreePointIsACutOffSliverGetsThePathFromAroundIt) {
   const Vec2 c(5.0, 2.0);
-  const auto post = [](const Vec2& p) {
-    return Polygon{p + Vec2(-0.05, -0.05), p + Vec2(0.05, -0.05), p + Vec2(0.05, 0.05), p + Vec2(-0.05, 0.05)};
-  };
-  PolygonMap m;
-  m.name = "posts";
-  m.bounds = Box{{0, 0}, {10, 5}};
-  m.obstacles = {post(c + Vec2(-0.51, -0.2945)), post(c + Vec2(0.51, -0.2945)), post(c + Vec2(0.0, 0.589))};
+  const PolygonMap m = test::postsAroundAHole(c);
   GlobalPathOptions opt;
   opt.inflation_radius_m = 0.472;  // the paper agent's circumradius
   GlobalPathPlanner planner(m, opt);
@@ -83,7 +78,7 @@ TEST(GlobalPath, AStartWhoseNearestFreePointIsACutOffSliverGetsThePathFromAround
   EXPECT_FALSE(inside.start_moved);
   // Just below the hole: inside M', its nearest free point in the hole. Without trying
   // the points around it: no path.
-  const Vec2 start = c + Vec2(0.0, -0.13);
+  const Vec2 start = test::startBelowTheHole(c);
   GlobalPathOptions plain = opt;
   plain.nudge_start = false;
   GlobalPathPlanner stuck(m, plain);

@@ -3,6 +3,7 @@
 #include "path/global_path.hpp"
 
 #include "alloc_counter.hpp"
+#include "posts_scene.hpp"
 #include "random_scenes.hpp"
 
 #include <gtest/gtest.h>
@@ -38,16 +39,11 @@ TEST(PathAllocations, WarmQueriesAllocateNothing) {
 // around it and the path with the start in front allocate nothing either.
 TEST(PathAllocations, NudgedStartsAllocateNothing) {
   const Vec2 c(5.0, 2.0);
-  const auto post = [](const Vec2& p) {
-    return Polygon{p + Vec2(-0.05, -0.05), p + Vec2(0.05, -0.05), p + Vec2(0.05, 0.05), p + Vec2(-0.05, 0.05)};
-  };
-  PolygonMap map;
-  map.bounds = Box{{0, 0}, {10, 5}};
-  map.obstacles = {post(c + Vec2(-0.51, -0.2945)), post(c + Vec2(0.51, -0.2945)), post(c + Vec2(0.0, 0.589))};
+  const PolygonMap map = test::postsAroundAHole(c);
   GlobalPathOptions options;
   options.inflation_radius_m = 0.472;
   GlobalPathPlanner planner(map, options);
-  const Vec2 starts[2] = {c + Vec2(0.0, -0.13), c + Vec2(0.0, -0.125)};
+  const Vec2 starts[2] = {test::startBelowTheHole(c), test::startBelowTheHole(c) + Vec2(0.0, 0.005)};
   const Vec2 goals[2] = {{1.0, 1.0}, {9.0, 4.0}};
   for (const Vec2& g : goals) {
     for (const Vec2& s : starts) planner.plan(s, g);
