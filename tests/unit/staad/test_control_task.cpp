@@ -299,7 +299,6 @@ TEST(ControlTask, PlansAgainstTheObstacleFramesPolygonsVelocitiesAndTurnRates) {
   for (std::size_t i = 0; i < 2; ++i) {
     hal::ObstacleFrame::Obstacle& o = frame.obstacles[i];
     o.n = 4;
-    o.vertices = {};
     o.vertices[0] = centres[i] + Vec2(-0.2, -0.2);
     o.vertices[1] = centres[i] + Vec2(0.2, -0.2);
     o.vertices[2] = centres[i] + Vec2(0.2, 0.2);
