@@ -70,8 +70,8 @@ struct StaaConfig {
   // runs; 0.3 cost 11 (seeds 1 and 2, 60 s).
   double passive_heading_spread = 0.2;
   // Both braking checks also predict each obstacle that turns on its circle (its turn rate
-  // comes through the perception seam: the simulation's agents have one, the depth tracker
-  // gives 0): braking along its circle in the first, keeping its speed along it in the
+  // comes through the perception seam: the simulation's agents have their w, depth
+  // perception estimates one per track): braking along its circle in the first, keeping its speed along it in the
   // passive one; the stop must be clear of the straight and the circular prediction. The
   // cooperative contacts on record were two agents turning into each other at 1.5-2 m/s,
   // each predicted on a straight line (docs/results.md).
