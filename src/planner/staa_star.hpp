@@ -71,8 +71,9 @@ struct StaaConfig {
   double passive_heading_spread = 0.2;
   // Both braking checks also predict each obstacle that turns on its circle (its turn rate
   // comes through the perception seam: the simulation's agents have their w, depth
-  // perception estimates one per track): braking along its circle in the first, keeping its speed along it in the
-  // passive one; the stop must be clear of the straight and the circular prediction. The
+  // perception estimates one per track): braking along its circle in the first, keeping its
+  // speed along it in the passive one; the stop must be clear of the straight and the
+  // circular prediction. The
   // cooperative contacts on record were two agents turning into each other at 1.5-2 m/s,
   // each predicted on a straight line (docs/results.md).
   bool predict_turning = true;
