@@ -73,9 +73,8 @@ struct StaaConfig {
   // comes through the perception seam: the simulation's agents have their w, depth
   // perception estimates one per track): braking along its circle in the first, keeping its
   // speed along it in the passive one; the stop must be clear of the straight and the
-  // circular prediction. The
-  // cooperative contacts on record were two agents turning into each other at 1.5-2 m/s,
-  // each predicted on a straight line (docs/results.md).
+  // circular prediction. The cooperative contacts on record were two agents turning into
+  // each other at 1.5-2 m/s, each predicted on a straight line (docs/results.md).
   bool predict_turning = true;
   double obstacle_reaction_s = 0.3;
   double obstacle_brake_decel = 2.0;  // m/s^2
