@@ -1,5 +1,7 @@
 #include "control/pd_controller.hpp"
 
+#include "geometry/predicates.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -29,8 +31,8 @@ bool insidePolygon(const Vec2& p, PolygonView poly) {
 }
 
 bool segmentsCross(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
-  const double o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
-  return ((o1 > 0.0) != (o2 > 0.0)) && ((o3 > 0.0) != (o4 > 0.0));
+  const int o1 = orientSign(a, b, c), o2 = orientSign(a, b, d), o3 = orientSign(c, d, a), o4 = orientSign(c, d, b);
+  return ((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0));
 }
 
 // Distance from p to the polygon (0 inside) and the polygon's point nearest to p.

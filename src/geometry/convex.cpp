@@ -1,5 +1,7 @@
 #include "geometry/convex.hpp"
 
+#include "geometry/predicates.hpp"
+
 #include "geometry/polygon.hpp"
 
 #include <ccd/ccd.h>
@@ -23,11 +25,11 @@ std::size_t convexHullInPlace(std::span<Vec2> points, std::span<Vec2> out) {
   // Popping on orient <= 0 drops collinear points; the chain never holds more than n + 1.
   std::size_t k = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    while (k >= 2 && orient(out[k - 2], out[k - 1], points[i]) <= 0.0) --k;
+    while (k >= 2 && orientSign(out[k - 2], out[k - 1], points[i]) <= 0) --k;
     out[k++] = points[i];
   }
   for (std::size_t i = n - 1, t = k + 1; i-- > 0;) {
-    while (k >= t && orient(out[k - 2], out[k - 1], points[i]) <= 0.0) --k;
+    while (k >= t && orientSign(out[k - 2], out[k - 1], points[i]) <= 0) --k;
     out[k++] = points[i];
   }
   return k - 1;  // the last vertex repeats the first
@@ -53,7 +55,7 @@ bool isConvex(PolygonView poly) {
   bool have_prev = false;
   // A turn between consecutive non-zero edges: same sign as the others, or straight on.
   auto turnIsConvex = [&turn](const Vec2& e0, const Vec2& e1) {
-    const int s = sign(cross(e0, e1));
+    const int s = orientSign(Vec2::Zero(), e0, e1);  // the exact sign of cross(e0, e1)
     if (s == 0) return e0.dot(e1) > 0.0;  // a fold back along the same line is not convex
     if (turn == 0) turn = s;
     return s == turn;

@@ -1,5 +1,7 @@
 #include "geometry/polygon.hpp"
 
+#include "geometry/predicates.hpp"
+
 #include <algorithm>
 #include <limits>
 
@@ -42,7 +44,6 @@ Containment locatePoint(const Vec2& p, PolygonView poly, double eps) {
 }
 
 namespace {
-int sign(double v) { return (v > 0.0) - (v < 0.0); }
 bool onSegment(const Vec2& p, const Vec2& a, const Vec2& b) {
   return std::min(a.x(), b.x()) <= p.x() && p.x() <= std::max(a.x(), b.x()) &&
          std::min(a.y(), b.y()) <= p.y() && p.y() <= std::max(a.y(), b.y());
@@ -50,8 +51,8 @@ bool onSegment(const Vec2& p, const Vec2& a, const Vec2& b) {
 }  // namespace
 
 bool segmentsIntersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
-  const int o1 = sign(orient(a, b, c)), o2 = sign(orient(a, b, d));
-  const int o3 = sign(orient(c, d, a)), o4 = sign(orient(c, d, b));
+  const int o1 = orientSign(a, b, c), o2 = orientSign(a, b, d);
+  const int o3 = orientSign(c, d, a), o4 = orientSign(c, d, b);
   if (o1 != o2 && o3 != o4) return true;
   if (o1 == 0 && onSegment(c, a, b)) return true;
   if (o2 == 0 && onSegment(d, a, b)) return true;
@@ -61,8 +62,8 @@ bool segmentsIntersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& 
 }
 
 bool segmentsCrossProperly(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
-  const int o1 = sign(orient(a, b, c)), o2 = sign(orient(a, b, d));
-  const int o3 = sign(orient(c, d, a)), o4 = sign(orient(c, d, b));
+  const int o1 = orientSign(a, b, c), o2 = orientSign(a, b, d);
+  const int o3 = orientSign(c, d, a), o4 = orientSign(c, d, b);
   return o1 * o2 < 0 && o3 * o4 < 0;
 }
 
@@ -117,7 +118,7 @@ std::optional<EdgePair> findSelfIntersection(PolygonView poly) {
         const Vec2& p = adjacent_next ? a : b;  // the other end of edge i
         const Vec2& q = adjacent_next ? d : c;  // the other end of edge j
         if (n == 3) continue;                   // a triangle's edges are all adjacent
-        if (orient(shared, p, q) == 0.0 && (p - shared).dot(q - shared) > 0.0) return EdgePair{i, j};
+        if (orientSign(shared, p, q) == 0 && (p - shared).dot(q - shared) > 0.0) return EdgePair{i, j};
         continue;
       }
       if (segmentsIntersect(a, b, c, d)) return EdgePair{i, j};

@@ -1,5 +1,7 @@
 #include "local/local_map.hpp"
 
+#include "geometry/predicates.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -209,7 +211,7 @@ void LocalMap::drawObstacles(const PolygonSet& real, const Box& box_aabb) {
     bool convex = true;
     double ylo = std::numeric_limits<double>::infinity(), yhi = -ylo;
     for (std::size_t v = 0; v < n; ++v) {
-      convex = convex && orient(poly[(v + n - 1) % n], poly[v], poly[(v + 1) % n]) >= 0.0;
+      convex = convex && orientSign(poly[(v + n - 1) % n], poly[v], poly[(v + 1) % n]) >= 0;
       const double gy = gyx_ * poly[v].x() + gyy_ * poly[v].y() + gy0_;
       ylo = std::min(ylo, gy);
       yhi = std::max(yhi, gy);

@@ -1,5 +1,7 @@
 #include "map/ros_import.hpp"
 
+#include "geometry/predicates.hpp"
+
 #include "geometry/clipper_ops.hpp"
 
 #include <clipper.hpp>
@@ -317,7 +319,7 @@ std::vector<Polygon> outsideCorners(const std::array<Vec2, 4>& image_corners) {
     const Vec2& b = image_corners[(i + 1) % 4];
     // The bounding-box corner beside edge a->b lies to its right (the image is counter-clockwise).
     Vec2 c(a.x(), b.y());
-    if (orient(a, b, c) >= 0.0) c = Vec2(b.x(), a.y());
+    if (orientSign(a, b, c) >= 0) c = Vec2(b.x(), a.y());
     if (std::abs(orient(a, b, c)) > 1e-9) out.push_back({a, c, b});
   }
   return out;

@@ -1,5 +1,7 @@
 #include "path/minimal_construct.hpp"
 
+#include "geometry/predicates.hpp"
+
 #include "geometry/polygon.hpp"
 
 #include <algorithm>
@@ -13,12 +15,11 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kNoPolygon = std::numeric_limits<std::uint32_t>::max();
 
-int sgn(double v) { return (v > 0.0) - (v < 0.0); }
 
 // Segment from `at` towards `other` touches the polygon at corner `at` (neighbours prev and
 // next) without cutting into it: both neighbours lie on the same side of the line.
 bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next) {
-  return sgn(orient(at, other, prev)) * sgn(orient(at, other, next)) >= 0;
+  return orientSign(at, other, prev) * orientSign(at, other, next) >= 0;
 }
 
 std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
@@ -272,7 +273,7 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
     if (!tangentAt(a.pos, b.pos, a.prev, a.next)) return false;
     // The path must turn around the corner, towards the side the polygon lies on.
     if (a.turn != 0) {
-      const int turn = sgn(orient(nodes_[static_cast<std::size_t>(a.parent)].pos, a.pos, b.pos));
+      const int turn = orientSign(nodes_[static_cast<std::size_t>(a.parent)].pos, a.pos, b.pos);
       if (turn != 0 && turn != a.turn) return false;
     }
   }
@@ -313,7 +314,7 @@ void MinimalConstruct::expand(std::int32_t v) {
     if (corner) {
       if (!tangentAt(pa, b.pos, prev, next)) continue;
       if (turn != 0) {
-        const int t = sgn(orient(pu, pa, b.pos));
+        const int t = orientSign(pu, pa, b.pos);
         if (t != 0 && t != turn) continue;
       }
     }
@@ -534,8 +535,8 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     node.state = kClosed;
     if (node.vertex != kNone && node.parent != kNone) {
       const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
-      int side = sgn(orient(u, node.pos, node.prev));
-      if (side == 0) side = sgn(orient(u, node.pos, node.next));
+      int side = orientSign(u, node.pos, node.prev);
+      if (side == 0) side = orientSign(u, node.pos, node.next);
       node.turn = static_cast<std::int8_t>(side);
     }
     closed_.push_back(v);

@@ -1,5 +1,7 @@
 #include "path/polygon_set.hpp"
 
+#include "geometry/predicates.hpp"
+
 #include "geometry/polygon.hpp"
 
 #include <algorithm>
@@ -14,17 +16,17 @@ namespace {
 constexpr double kMaxGridCells = 1 << 20;
 
 // Does the way from vertex c towards point t start strictly inside the interior angle at c
-// of a counter-clockwise polygon (prev -> c -> next)? Written with orientations of the
-// points themselves, not of difference vectors, so that it rounds the same way as the other
-// tests here (a point exactly on an edge's line must not also be "a hair to its left").
+// of a counter-clockwise polygon (prev -> c -> next)? Exact orientations of the points
+// themselves, as in every test here (a point exactly on an edge's line is on it, never "a
+// hair to its left").
 bool entersInterior(const Vec2& prev, const Vec2& c, const Vec2& next, const Vec2& t) {
-  const double turn = orient(prev, c, next);
-  const double l1 = orient(prev, c, t);
-  const double l2 = orient(c, next, t);
-  if (turn > 0.0) return l1 > 0.0 && l2 > 0.0;  // convex corner: the cone between the edges
-  if (turn < 0.0) return l1 > 0.0 || l2 > 0.0;  // reflex corner: everything but the outside cone
+  const int turn = orientSign(prev, c, next);
+  const int l1 = orientSign(prev, c, t);
+  const int l2 = orientSign(c, next, t);
+  if (turn > 0) return l1 > 0 && l2 > 0;  // convex corner: the cone between the edges
+  if (turn < 0) return l1 > 0 || l2 > 0;  // reflex corner: everything but the outside cone
   // Straight-through vertex (collinear edges) or a spike: left of the outgoing edge.
-  return (c - prev).dot(next - c) > 0.0 ? l2 > 0.0 : false;
+  return (c - prev).dot(next - c) > 0.0 ? l2 > 0 : false;
 }
 
 bool withinBox(const Vec2& p, const Vec2& a, const Vec2& b) {
@@ -33,18 +35,18 @@ bool withinBox(const Vec2& p, const Vec2& a, const Vec2& b) {
 }
 
 // Strict containment with no tolerance, so that it agrees exactly with the segment test
-// below: a point a rounding error inside counts as inside (and gets moved out by the
-// planner) instead of as "on the boundary", where every segment leaving it would be blocked.
+// below: a point the least bit inside counts as inside (and gets moved out by the planner)
+// instead of as "on the boundary", where every segment leaving it would be blocked.
 bool strictlyInside(const Vec2& p, PolygonView poly) {
   bool inside = false;
   for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
     const Vec2& a = poly[j];
     const Vec2& b = poly[i];
-    if (orient(a, b, p) == 0.0 && withinBox(p, a, b)) return false;  // exactly on the boundary
+    const int o = orientSign(a, b, p);
+    if (o == 0 && withinBox(p, a, b)) return false;  // exactly on the boundary
     if ((a.y() > p.y()) != (b.y() > p.y())) {
       // Which side of the edge p is on, decided by the sign of an orientation (no division).
-      const double o = orient(a, b, p);
-      if ((b.y() > a.y()) == (o > 0.0)) inside = !inside;
+      if ((b.y() > a.y()) == (o > 0)) inside = !inside;
     }
   }
   return inside;
@@ -100,7 +102,7 @@ void PolygonSet::assign(std::span<const PolygonView> polygons, const Options& op
     const Vec2& p = vertices_[prevVertex(v)];
     const Vec2& c = vertices_[v];
     const Vec2& n = vertices_[nextVertex(v)];
-    convex_[v] = orient(p, c, n) > 0.0 ? 1 : 0;
+    convex_[v] = orientSign(p, c, n) > 0 ? 1 : 0;
   }
   edge_stamp_.assign(vertices_.size(), 0);
   poly_stamp_.assign(polys_.size(), 0);
@@ -256,21 +258,19 @@ bool PolygonSet::forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const {
 bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci) const {
   const Vec2& c = vertices_[ci];
   const Vec2& d = vertices_[nextVertex(ci)];
-  const double oc = orient(a, b, c);
-  const double od = orient(a, b, d);
-  const double oa = orient(c, d, a);
-  const double ob = orient(c, d, b);
-  if (((oc > 0.0 && od < 0.0) || (oc < 0.0 && od > 0.0)) && ((oa > 0.0 && ob < 0.0) || (oa < 0.0 && ob > 0.0))) {
-    return true;
-  }
-  if (oc == 0.0 && a != b && withinBox(c, a, b)) {
+  const int oc = orientSign(a, b, c);
+  const int od = orientSign(a, b, d);
+  const int oa = orientSign(c, d, a);
+  const int ob = orientSign(c, d, b);
+  if (oc * od < 0 && oa * ob < 0) return true;
+  if (oc == 0 && a != b && withinBox(c, a, b)) {
     const Vec2& p = vertices_[prevVertex(ci)];
     if (c != b && entersInterior(p, c, d, b)) return true;
     if (c != a && entersInterior(p, c, d, a)) return true;
   }
   // An end on the edge: the segment enters when its other end lies left of the edge.
-  if (oa == 0.0 && a != c && a != d && withinBox(a, c, d) && ob > 0.0) return true;
-  if (ob == 0.0 && b != c && b != d && withinBox(b, c, d) && oa > 0.0) return true;
+  if (oa == 0 && a != c && a != d && withinBox(a, c, d) && ob > 0) return true;
+  if (ob == 0 && b != c && b != d && withinBox(b, c, d) && oa > 0) return true;
   return false;
 }
 

@@ -5,6 +5,7 @@
 // stderr naming the value and where it came from.
 
 #include "geometry/clipper_ops.hpp"
+#include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
 #include "map/generate.hpp"
 #include "map/goals.hpp"
@@ -144,20 +145,6 @@ double microsecondsSince(Clock::time_point t0) {
 
 // ---- info ----
 
-// For a simple polygon (the loader guarantees it): every turn has the same sign.
-bool isConvex(staa::PolygonView poly) {
-  const std::size_t n = poly.size();
-  int sign = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double o = staa::orient(poly[k], poly[(k + 1) % n], poly[(k + 2) % n]);
-    if (o == 0.0) continue;
-    const int s = o > 0.0 ? 1 : -1;
-    if (sign != 0 && s != sign) return false;
-    sign = s;
-  }
-  return true;
-}
-
 Json boxJson(const Box& b) { return Json::array({b.min.x(), b.min.y(), b.max.x(), b.max.y()}); }
 std::string boxText(const Box& b) {
   return "[" + fmt(b.min.x(), 2) + ", " + fmt(b.min.y(), 2) + ", " + fmt(b.max.x(), 2) + ", " + fmt(b.max.y(), 2) +
@@ -170,7 +157,7 @@ int runInfo(const std::string& map_file, bool json) {
   std::optional<Box> extent;
   for (const auto& poly : map.obstacles) {
     vertices += poly.size();
-    if (isConvex(poly)) ++convex;
+    if (staa::isConvex(poly)) ++convex;
     const Box b = staa::boundingBox(poly);
     if (!extent) {
       extent = b;

@@ -1,0 +1,124 @@
+#include "geometry/predicates.hpp"
+
+#include "geometry/polygon.hpp"
+#include "geometry/splitmix64.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+
+namespace staa {
+namespace {
+
+// The reference: coordinates that are whole multiples of 2^-53 below 32 in magnitude are
+// integers of at most 59 bits in that unit, so the determinant is an integer of at most 120
+// bits, exact in __int128.
+constexpr double kUnit = 0x1p-53;
+__extension__ typedef __int128 Int128;  // GCC and clang; -Wpedantic would flag the bare type
+
+Int128 units(double v) {
+  const double k = v / kUnit;  // exact: a power-of-two scaling
+  EXPECT_EQ(k, std::trunc(k)) << v << " is not a multiple of 2^-53";
+  EXPECT_LT(std::abs(k), 0x1p59);
+  return static_cast<Int128>(k);
+}
+
+int referenceSign(const Vec2& a, const Vec2& b, const Vec2& c) {
+  const Int128 ax = units(a.x()), ay = units(a.y()), bx = units(b.x()), by = units(b.y());
+  const Int128 cx = units(c.x()), cy = units(c.y());
+  const Int128 det = (ax - cx) * (by - cy) - (ay - cy) * (bx - cx);
+  return (det > 0) - (det < 0);
+}
+
+int naiveSign(const Vec2& a, const Vec2& b, const Vec2& c) {
+  const double o = orient(a, b, c);
+  return (o > 0.0) - (o < 0.0);
+}
+
+// Kettner, Mehlhorn, Pion, Schirra and Yap's "classroom example" of a failing orientation:
+// the points p + (i, j) ulps around p = (0.5, 0.5) against the line from (12, 12) to
+// (24, 24). Rounding the plain evaluation calls many of them on the wrong side.
+TEST(Predicates, OrientSignIsExactOnTheClassroomGridWhereThePlainEvaluationFails) {
+  const Vec2 q(12.0, 12.0), r(24.0, 24.0);
+  int wrong_plain = 0, cells = 0;
+  for (int i = 0; i < 64; ++i) {
+    for (int j = 0; j < 64; ++j) {
+      const Vec2 p(0.5 + i * kUnit, 0.5 + j * kUnit);
+      const int ref = referenceSign(p, q, r);
+      ASSERT_EQ(orientSign(p, q, r), ref) << "i " << i << " j " << j;
+      // The same triangle in every order: a rotation keeps the sign, a swap flips it.
+      ASSERT_EQ(orientSign(q, r, p), ref);
+      ASSERT_EQ(orientSign(r, p, q), ref);
+      ASSERT_EQ(orientSign(q, p, r), -ref);
+      wrong_plain += naiveSign(p, q, r) != ref;
+      ++cells;
+    }
+  }
+  // The test would not prove anything if the plain evaluation were right here.
+  EXPECT_GT(wrong_plain, cells / 10) << "the plain orientation was wrong in " << wrong_plain << " of " << cells;
+}
+
+TEST(Predicates, OrientSignIsExactOnRandomNearlyCollinearTriples) {
+  SplitMix64 rng(7);
+  auto coordinate = [&rng] {
+    // A multiple of 2^-53 in [-4, 4): 56 random bits (c below stays under 20 in magnitude).
+    const auto k = static_cast<std::int64_t>(rng.next() >> 8) - (std::int64_t{1} << 55);
+    return static_cast<double>(k) * kUnit;
+  };
+  int collinear = 0;
+  for (int n = 0; n < 20000; ++n) {
+    const Vec2 a(coordinate(), coordinate()), b(coordinate(), coordinate());
+    // c on the line through a and b, rounded to the grid, then nudged by a few units.
+    const double t = static_cast<double>(rng.next() >> 11) * 0x1p-53 * 3.0 - 1.0;
+    Vec2 c = a + t * (b - a);
+    c = Vec2(std::round(c.x() / kUnit) * kUnit, std::round(c.y() / kUnit) * kUnit);
+    c += Vec2(static_cast<double>(static_cast<int>(rng.next() % 5) - 2) * kUnit,
+              static_cast<double>(static_cast<int>(rng.next() % 5) - 2) * kUnit);
+    const int ref = referenceSign(a, b, c);
+    ASSERT_EQ(orientSign(a, b, c), ref) << n;
+    ASSERT_EQ(orientSign(b, a, c), -ref) << n;
+    collinear += ref == 0;
+  }
+  // Exactly collinear by construction (coarse coordinates: every sum is exact), then one
+  // hair (2^-40) off the line.
+  auto coarse = [&rng] { return static_cast<double>(static_cast<int>(rng.next() % 4001) - 2000) * 0x1p-10; };
+  for (int n = 0; n < 5000; ++n) {
+    const Vec2 a(coarse(), coarse()), d(coarse(), coarse());
+    const Vec2 b = a + 3.0 * d, c = a - 2.0 * d;
+    ASSERT_EQ(referenceSign(a, b, c), 0);
+    ASSERT_EQ(orientSign(a, b, c), 0) << n;
+    ASSERT_EQ(orientSign(c, a, b), 0) << n;
+    const Vec2 c_off(c.x() + 0x1p-40, c.y());  // exact: c is below 8 in magnitude
+    ASSERT_EQ(orientSign(a, b, c_off), referenceSign(a, b, c_off)) << n;
+    collinear += 1;
+  }
+  EXPECT_GE(collinear, 5000);
+}
+
+TEST(Predicates, OrientSignOnEasyInputsAgreesWithThePlainOrientation) {
+  EXPECT_EQ(orientSign({0, 0}, {1, 0}, {0, 1}), 1);
+  EXPECT_EQ(orientSign({0, 0}, {0, 1}, {1, 0}), -1);
+  EXPECT_EQ(orientSign({0, 0}, {1, 1}, {3, 3}), 0);
+  EXPECT_EQ(orientSign({1.5, 4.5}, {1.5, 9.0}, {1.5, -2.0}), 0);  // a wall's vertical line
+  // Decimal coordinates that are not collinear in binary: 0.1, 0.2, 0.3 on the diagonal.
+  const Vec2 a(0.1, 0.1), b(0.2, 0.2), c(0.3, 0.3);
+  EXPECT_EQ(orientSign(a, b, c), -orientSign(b, a, c));
+  EXPECT_EQ(orientSign(a, b, c), orientSign(b, c, a));
+}
+
+// The polygon predicates built on it agree with each other on a near-degenerate crossing:
+// a segment through a vertex of the grid example touches, never "crosses a hair".
+TEST(Predicates, SegmentTestsAgreeAtAnExactlyCollinearTouch) {
+  const Vec2 q(12.0, 12.0), r(24.0, 24.0);
+  const Vec2 p(0.5, 0.5);  // exactly on the line through q and r
+  EXPECT_EQ(orientSign(p, q, r), 0);
+  EXPECT_TRUE(segmentsIntersect(p, r, q, Vec2(12.0, 30.0)));
+  EXPECT_FALSE(segmentsCrossProperly(p, r, q, Vec2(12.0, 30.0)));
+  const Vec2 off(0.5 + kUnit, 0.5);  // one unit to the right of it: clockwise
+  EXPECT_EQ(orientSign(off, q, r), referenceSign(off, q, r));
+  EXPECT_EQ(orientSign(off, q, r), -1);
+}
+
+}  // namespace
+}  // namespace staa
