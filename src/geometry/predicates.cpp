@@ -15,6 +15,30 @@ inline void twoSum(double a, double b, double& sum, double& err) {
   err = (a - av) + (b - bv);
 }
 
+// a - b = diff + err exactly.
+inline void twoDiff(double a, double b, double& diff, double& err) {
+  diff = a - b;
+  const double bv = a - diff;
+  const double av = diff + bv;
+  err = (a - av) + (bv - b);
+}
+
+// a * b = prod + err exactly. With a fused multiply-add in hardware, fma gives the error;
+// without one, Dekker's split does, and then nothing can be contracted (glibc's software fma
+// costs a hundred instructions a call).
+inline void twoProduct(double a, double b, double& prod, double& err) {
+  prod = a * b;
+#ifdef FP_FAST_FMA
+  err = std::fma(a, b, -prod);
+#else
+  constexpr double kSplitter = 134217729.0;  // 2^27 + 1
+  const double ca = kSplitter * a, cb = kSplitter * b;
+  const double ahi = ca - (ca - a), bhi = cb - (cb - b);
+  const double alo = a - ahi, blo = b - bhi;
+  err = alo * blo - (((prod - ahi * bhi) - alo * bhi) - ahi * blo);
+#endif
+}
+
 // Adds x to a nonoverlapping expansion (components in increasing magnitude), keeping it so
 // (Shewchuk's Grow-Expansion). The expansion's sign is that of its largest component.
 template <std::size_t N>
@@ -29,24 +53,48 @@ inline void grow(std::array<double, N>& e, std::size_t& n, double x) {
   e[n++] = q;
 }
 
-}  // namespace
-
-int orientSignExact(const Vec2& a, const Vec2& b, const Vec2& c) {
-  // (a - c) x (b - c) expanded into products of the inputs (the c.x * c.y terms cancel);
-  // each product is p + fma(x, y, -p) exactly, whatever the hardware.
-  const double xs[6] = {a.x(), -a.x(), -c.x(), -a.y(), a.y(), c.y()};
-  const double ys[6] = {b.y(), c.y(), b.y(), b.x(), c.x(), b.x()};
-  std::array<double, 12> e{};
-  std::size_t n = 0;
-  for (int k = 0; k < 6; ++k) {
-    const double p = xs[k] * ys[k];
-    grow(e, n, p);
-    grow(e, n, std::fma(xs[k], ys[k], -p));
-  }
+template <std::size_t N>
+int expansionSign(const std::array<double, N>& e, std::size_t n) {
   for (std::size_t i = n; i-- > 0;) {
     if (e[i] != 0.0) return e[i] > 0.0 ? 1 : -1;
   }
   return 0;
+}
+
+}  // namespace
+
+int orientSignExact(const Vec2& a, const Vec2& b, const Vec2& c) {
+  double dx1 = 0.0, dy2 = 0.0, dy1 = 0.0, dx2 = 0.0, t1 = 0.0, t2 = 0.0, t3 = 0.0, t4 = 0.0;
+  twoDiff(b.x(), a.x(), dx1, t1);
+  twoDiff(c.y(), a.y(), dy2, t2);
+  twoDiff(b.y(), a.y(), dy1, t3);
+  twoDiff(c.x(), a.x(), dx2, t4);
+  if (t1 == 0.0 && t2 == 0.0 && t3 == 0.0 && t4 == 0.0) {
+    // Exact differences (the usual case for nearby points): dx1 dy2 - dy1 dx2 from two
+    // error-free products.
+    double l = 0.0, le = 0.0, r = 0.0, re = 0.0;
+    twoProduct(dx1, dy2, l, le);
+    twoProduct(dy1, dx2, r, re);
+    std::array<double, 4> e{};
+    std::size_t n = 0;
+    grow(e, n, le);
+    grow(e, n, -re);
+    grow(e, n, l);
+    grow(e, n, -r);
+    return expansionSign(e, n);
+  }
+  // (b - a) x (c - a) expanded into products of the inputs (the a.x * a.y terms cancel).
+  const double xs[6] = {b.x(), -b.x(), -a.x(), -b.y(), b.y(), a.y()};
+  const double ys[6] = {c.y(), a.y(), c.y(), c.x(), a.x(), c.x()};
+  std::array<double, 12> e{};
+  std::size_t n = 0;
+  for (int k = 0; k < 6; ++k) {
+    double p = 0.0, pe = 0.0;
+    twoProduct(xs[k], ys[k], p, pe);
+    grow(e, n, p);
+    grow(e, n, pe);
+  }
+  return expansionSign(e, n);
 }
 
 }  // namespace staa::detail

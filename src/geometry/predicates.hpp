@@ -9,7 +9,11 @@
 
 #include "geometry/types.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 namespace staa {
 
@@ -23,17 +27,43 @@ inline constexpr double kOrientErrorBound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53;
 
 // +1 when (a, b, c) turn counter-clockwise, -1 clockwise, 0 when exactly collinear.
 inline int orientSign(const Vec2& a, const Vec2& b, const Vec2& c) {
-  const double left = (a.x() - c.x()) * (b.y() - c.y());
-  const double right = (a.y() - c.y()) * (b.x() - c.x());
+  // Pivoting on a as orient() does: calls that share a and b share the difference b - a.
+  const double left = (b.x() - a.x()) * (c.y() - a.y());
+  const double right = (b.y() - a.y()) * (c.x() - a.x());
   const double det = left - right;
-  // Opposite signs (or a zero) cannot cancel: the sign of the rounded result is exact.
-  if ((left > 0.0 && right <= 0.0) || (left < 0.0 && right >= 0.0) || left == 0.0) {
-    return (det > 0.0) - (det < 0.0);
-  }
   const double bound = detail::kOrientErrorBound * (std::abs(left) + std::abs(right));
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
+  // Branch-free on the common path: the signs of random triples would mispredict. A bound
+  // of 0 means both products are 0, so a difference is exactly 0 and so is the determinant.
+  const int sign = (det > bound) - (det < -bound);
+  if (sign != 0 || bound == 0.0) [[likely]] return sign;
   return detail::orientSignExact(a, b, c);
+}
+
+// The largest coordinate magnitude of a point (for orientStaticBound).
+inline double maxAbsCoordinate(const Vec2& p) { return std::max(std::abs(p.x()), std::abs(p.y())); }
+
+// A bound that orientSign's filter never exceeds for points whose coordinates all lie in
+// [-m, m] (a static filter, as CGAL's): with m rounded up to a power of two p, the
+// differences stay within 2p, the products within 4p^2 and their sum within 8p^2, all
+// exactly, so the filter's bound is at most kOrientErrorBound * 8p^2. Infinite for a
+// non-finite or huge m (then the static test never decides); tiny m are raised to 2^-400 so
+// that p^2 does not underflow.
+inline double orientStaticBound(double m) {
+  if (!(m < 0x1p500)) return std::numeric_limits<double>::infinity();
+  // p: the power of two of m's exponent field, doubled (>= m).
+  const auto bits = std::bit_cast<std::uint64_t>(std::max(m, 0x1p-400)) & 0x7ff0000000000000ULL;
+  const double p = 2.0 * std::bit_cast<double>(bits);
+  return detail::kOrientErrorBound * 8.0 * p * p;
+}
+
+// orientSign for points within the coordinate bound `static_bound` was made for
+// (orientStaticBound): a determinant beyond it needs no further test, so the hot loops of
+// the path search pay about what the plain orientation costs.
+inline int orientSign(const Vec2& a, const Vec2& b, const Vec2& c, double static_bound) {
+  const double det = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+  const int sign = (det > static_bound) - (det < -static_bound);
+  if (sign != 0) [[likely]] return sign;
+  return orientSign(a, b, c);
 }
 
 }  // namespace staa

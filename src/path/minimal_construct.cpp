@@ -18,8 +18,8 @@ constexpr std::uint32_t kNoPolygon = std::numeric_limits<std::uint32_t>::max();
 
 // Segment from `at` towards `other` touches the polygon at corner `at` (neighbours prev and
 // next) without cutting into it: both neighbours lie on the same side of the line.
-bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next) {
-  return orientSign(at, other, prev) * orientSign(at, other, next) >= 0;
+bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next, double bound) {
+  return orientSign(at, other, prev, bound) * orientSign(at, other, next, bound) >= 0;
 }
 
 std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
@@ -270,14 +270,14 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
   const Node& a = nodes_[static_cast<std::size_t>(from)];
   const Node& b = nodes_[static_cast<std::size_t>(to)];
   if (a.vertex != kNone) {
-    if (!tangentAt(a.pos, b.pos, a.prev, a.next)) return false;
+    if (!tangentAt(a.pos, b.pos, a.prev, a.next, orient_bound_)) return false;
     // The path must turn around the corner, towards the side the polygon lies on.
     if (a.turn != 0) {
-      const int turn = orientSign(nodes_[static_cast<std::size_t>(a.parent)].pos, a.pos, b.pos);
+      const int turn = orientSign(nodes_[static_cast<std::size_t>(a.parent)].pos, a.pos, b.pos, orient_bound_);
       if (turn != 0 && turn != a.turn) return false;
     }
   }
-  return b.vertex == kNone || tangentAt(b.pos, a.pos, b.prev, b.next);
+  return b.vertex == kNone || tangentAt(b.pos, a.pos, b.prev, b.next, orient_bound_);
 }
 
 void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
@@ -307,18 +307,19 @@ void MinimalConstruct::expand(std::int32_t v) {
   const int turn = a.turn;
   const Vec2 pu = turn != 0 ? nodes_[static_cast<std::size_t>(a.parent)].pos : pa;
   const double ga = a.g;
+  const double bound = orient_bound_;
   const std::size_t n = nodes_.size();
   for (std::size_t w = 0; w < n; ++w) {
     Node& b = nodes_[w];
     if (b.state == kClosed) continue;
     if (corner) {
-      if (!tangentAt(pa, b.pos, prev, next)) continue;
+      if (!tangentAt(pa, b.pos, prev, next, bound)) continue;
       if (turn != 0) {
-        const int t = orientSign(pu, pa, b.pos);
+        const int t = orientSign(pu, pa, b.pos, bound);
         if (t != 0 && t != turn) continue;
       }
     }
-    if (b.vertex != kNone && !tangentAt(b.pos, pa, b.prev, b.next)) continue;
+    if (b.vertex != kNone && !tangentAt(b.pos, pa, b.prev, b.next, bound)) continue;
     const double g = ga + (b.pos - pa).norm();
     if (b.state == kOpen && g >= b.g) continue;
     const auto to = static_cast<std::int32_t>(w);
@@ -417,6 +418,9 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
   }
   result.start_moved = start != start_in;
   result.goal_moved = goal != goal_in;
+  // Every node of this query's graph is a vertex of the two sets, the goal or this start.
+  orient_bound_ = orientStaticBound(std::max({static_.maxCoordinate(), dynamic_.maxCoordinate(),
+                                              maxAbsCoordinate(start), maxAbsCoordinate(goal)}));
 
   // The search runs backwards, from the goal (the root, node 0) to the start. Closed nodes
   // then carry exact distances to the goal, which stay true while the goal and the obstacles
@@ -535,8 +539,8 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     node.state = kClosed;
     if (node.vertex != kNone && node.parent != kNone) {
       const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
-      int side = orientSign(u, node.pos, node.prev);
-      if (side == 0) side = orientSign(u, node.pos, node.next);
+      int side = orientSign(u, node.pos, node.prev, orient_bound_);
+      if (side == 0) side = orientSign(u, node.pos, node.next, orient_bound_);
       node.turn = static_cast<std::int8_t>(side);
     }
     closed_.push_back(v);

@@ -188,6 +188,7 @@ class MinimalConstruct {
   bool have_goal_ = false;
   Vec2 target_pos_{0.0, 0.0};  // the start: the backward search's target, its heuristic's anchor
   Vec2 key_anchor_{0.0, 0.0};  // the start the heap's keys were last computed for
+  double orient_bound_ = 0.0;  // orientStaticBound for the points of the current query
   std::int32_t target_ = kNone;
   bool tree_valid_ = false;    // the search tree may be resumed for tree_goal_
   bool tree_with_dynamic_ = false;  // ... and it was grown with the dynamic obstacles

@@ -19,10 +19,10 @@ constexpr double kMaxGridCells = 1 << 20;
 // of a counter-clockwise polygon (prev -> c -> next)? Exact orientations of the points
 // themselves, as in every test here (a point exactly on an edge's line is on it, never "a
 // hair to its left").
-bool entersInterior(const Vec2& prev, const Vec2& c, const Vec2& next, const Vec2& t) {
-  const int turn = orientSign(prev, c, next);
-  const int l1 = orientSign(prev, c, t);
-  const int l2 = orientSign(c, next, t);
+bool entersInterior(const Vec2& prev, const Vec2& c, const Vec2& next, const Vec2& t, double bound) {
+  const int turn = orientSign(prev, c, next, bound);
+  const int l1 = orientSign(prev, c, t, bound);
+  const int l2 = orientSign(c, next, t, bound);
   if (turn > 0) return l1 > 0 && l2 > 0;  // convex corner: the cone between the edges
   if (turn < 0) return l1 > 0 || l2 > 0;  // reflex corner: everything but the outside cone
   // Straight-through vertex (collinear edges) or a spike: left of the outgoing edge.
@@ -37,12 +37,12 @@ bool withinBox(const Vec2& p, const Vec2& a, const Vec2& b) {
 // Strict containment with no tolerance, so that it agrees exactly with the segment test
 // below: a point the least bit inside counts as inside (and gets moved out by the planner)
 // instead of as "on the boundary", where every segment leaving it would be blocked.
-bool strictlyInside(const Vec2& p, PolygonView poly) {
+bool strictlyInside(const Vec2& p, PolygonView poly, double bound) {
   bool inside = false;
   for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
     const Vec2& a = poly[j];
     const Vec2& b = poly[i];
-    const int o = orientSign(a, b, p);
+    const int o = orientSign(a, b, p, bound);
     if (o == 0 && withinBox(p, a, b)) return false;  // exactly on the boundary
     if ((a.y() > p.y()) != (b.y() > p.y())) {
       // Which side of the edge p is on, decided by the sign of an orientation (no division).
@@ -108,6 +108,8 @@ void PolygonSet::assign(std::span<const PolygonView> polygons, const Options& op
   poly_stamp_.assign(polys_.size(), 0);
   stamp_ = 0;
   extent_ = Box{};
+  max_abs_ = 0.0;
+  for (const Vec2& v : vertices_) max_abs_ = std::max(max_abs_, maxAbsCoordinate(v));
   if (!polys_.empty()) {
     extent_ = polys_[0].box;
     for (const PolyRec& r : polys_) {
@@ -255,18 +257,21 @@ bool PolygonSet::forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const {
 //  - an end of the segment lies inside the edge and the other end lies left of it.
 // Any first entry into the interior happens at one of these, so no containment test of a
 // sample point is needed.
-bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci) const {
+bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci, double bound) const {
   const Vec2& c = vertices_[ci];
   const Vec2& d = vertices_[nextVertex(ci)];
-  const int oc = orientSign(a, b, c);
-  const int od = orientSign(a, b, d);
-  const int oa = orientSign(c, d, a);
-  const int ob = orientSign(c, d, b);
+  const int oc = orientSign(a, b, c, bound);
+  const int od = orientSign(a, b, d, bound);
+  // The edge strictly on one side of the segment's line: no crossing, c not on the segment,
+  // and no end of the segment on the edge (the line through it would separate c and d).
+  if (oc * od > 0) return false;
+  const int oa = orientSign(c, d, a, bound);
+  const int ob = orientSign(c, d, b, bound);
   if (oc * od < 0 && oa * ob < 0) return true;
   if (oc == 0 && a != b && withinBox(c, a, b)) {
     const Vec2& p = vertices_[prevVertex(ci)];
-    if (c != b && entersInterior(p, c, d, b)) return true;
-    if (c != a && entersInterior(p, c, d, a)) return true;
+    if (c != b && entersInterior(p, c, d, b, bound)) return true;
+    if (c != a && entersInterior(p, c, d, a, bound)) return true;
   }
   // An end on the edge: the segment enters when its other end lies left of the edge.
   if (oa == 0 && a != c && a != d && withinBox(a, c, d) && ob > 0) return true;
@@ -274,16 +279,22 @@ bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci) const 
   return false;
 }
 
+double PolygonSet::orientBound(const Vec2& a, const Vec2& b) const {
+  return orientStaticBound(std::max({max_abs_, maxAbsCoordinate(a), maxAbsCoordinate(b)}));
+}
+
 bool PolygonSet::segmentBlocked(const Vec2& a, const Vec2& b) const {
-  return forEachEdgeNearSegment(a, b, [&](std::size_t v) { return edgeBlocks(a, b, v); });
+  const double bound = orientBound(a, b);
+  return forEachEdgeNearSegment(a, b, [&](std::size_t v) { return edgeBlocks(a, b, v, bound); });
 }
 
 std::size_t PolygonSet::segmentBlockers(const Vec2& a, const Vec2& b, std::span<std::uint32_t> out) const {
+  const double bound = orientBound(a, b);
   std::size_t n = 0;
   forEachEdgeNearSegment(a, b, [&](std::size_t v) {
     const std::uint32_t k = vertex_polygon_[v];
     if (poly_stamp_[k] == stamp_) return false;  // already listed
-    if (edgeBlocks(a, b, v)) {
+    if (edgeBlocks(a, b, v, bound)) {
       poly_stamp_[k] = stamp_;
       if (n < out.size()) out[n++] = k;
     }
@@ -293,18 +304,21 @@ std::size_t PolygonSet::segmentBlockers(const Vec2& a, const Vec2& b, std::span<
 }
 
 bool PolygonSet::pointBlocked(const Vec2& p) const {
-  return forEachPolygonNearPoint(p, [&](std::uint32_t k) { return strictlyInside(p, polygon(k)); });
+  const double bound = orientBound(p, p);
+  return forEachPolygonNearPoint(p, [&](std::uint32_t k) { return strictlyInside(p, polygon(k), bound); });
 }
 
 bool PolygonSet::pointBlockedExcept(const Vec2& p, std::uint32_t skip) const {
+  const double bound = orientBound(p, p);
   return forEachPolygonNearPoint(
-      p, [&](std::uint32_t k) { return k != skip && strictlyInside(p, polygon(k)); });
+      p, [&](std::uint32_t k) { return k != skip && strictlyInside(p, polygon(k), bound); });
 }
 
 std::size_t PolygonSet::coveringPolygons(const Vec2& p, std::uint32_t skip, std::span<std::uint32_t> out) const {
+  const double bound = orientBound(p, p);
   std::size_t n = 0;
   forEachPolygonNearPoint(p, [&](std::uint32_t k) {
-    if (k != skip && n < out.size() && strictlyInside(p, polygon(k))) out[n++] = k;
+    if (k != skip && n < out.size() && strictlyInside(p, polygon(k), bound)) out[n++] = k;
     return false;
   });
   return n;

@@ -74,6 +74,8 @@ class PolygonSet {
   template <typename Visitor>
   bool forEachEdgeInBox(const Box& box, Visitor&& visit) const;
   const Box& extent() const { return extent_; }
+  // The largest coordinate magnitude of any vertex (0 when empty).
+  double maxCoordinate() const { return max_abs_; }
 
   // Distance from p to the nearest polygon edge (inside or outside); infinity when empty.
   double distanceToNearestEdge(const Vec2& p) const;
@@ -92,7 +94,10 @@ class PolygonSet {
 
   // Does the segment enter the interior of polygon `k` through the boundary near edge
   // starting at vertex c? (the per-edge part of the exact test, see polygon_set.cpp).
-  bool edgeBlocks(const Vec2& a, const Vec2& b, std::size_t c) const;
+  bool edgeBlocks(const Vec2& a, const Vec2& b, std::size_t c, double bound) const;
+  // The static orientation bound (geometry/predicates.hpp) for this set's vertices and the
+  // query points a and b.
+  double orientBound(const Vec2& a, const Vec2& b) const;
 
   template <typename Visitor>
   bool forEachEdgeNearSegment(const Vec2& a, const Vec2& b, Visitor&& visit) const;
@@ -120,6 +125,7 @@ class PolygonSet {
   // Uniform grid over the set's extent: per cell, the edges (by start vertex) that overlap
   // the cell's box and the polygons whose box overlaps it. CSR layout (offsets + items).
   Box extent_;
+  double max_abs_ = 0.0;
   bool has_grid_ = false;
   double cell_ = 1.0;
   Vec2 grid_origin_{0.0, 0.0};

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace staa {
 namespace {
@@ -51,6 +52,8 @@ TEST(Predicates, OrientSignIsExactOnTheClassroomGridWhereThePlainEvaluationFails
       ASSERT_EQ(orientSign(q, r, p), ref);
       ASSERT_EQ(orientSign(r, p, q), ref);
       ASSERT_EQ(orientSign(q, p, r), -ref);
+      // The static filter, with the bound for the grid's coordinates, decides the same.
+      ASSERT_EQ(orientSign(p, q, r, orientStaticBound(24.0)), ref);
       wrong_plain += naiveSign(p, q, r) != ref;
       ++cells;
     }
@@ -78,6 +81,7 @@ TEST(Predicates, OrientSignIsExactOnRandomNearlyCollinearTriples) {
     const int ref = referenceSign(a, b, c);
     ASSERT_EQ(orientSign(a, b, c), ref) << n;
     ASSERT_EQ(orientSign(b, a, c), -ref) << n;
+    ASSERT_EQ(orientSign(a, b, c, orientStaticBound(20.0)), ref) << n;
     collinear += ref == 0;
   }
   // Exactly collinear by construction (coarse coordinates: every sum is exact), then one
@@ -94,6 +98,18 @@ TEST(Predicates, OrientSignIsExactOnRandomNearlyCollinearTriples) {
     collinear += 1;
   }
   EXPECT_GE(collinear, 5000);
+}
+
+TEST(Predicates, TheStaticBoundCoversEveryCoordinateUpToItsMagnitude) {
+  // Rounded up to a power of two: 24 -> 32, 8 * 32^2 * the filter's constant.
+  EXPECT_EQ(orientStaticBound(24.0), detail::kOrientErrorBound * 8.0 * 32.0 * 32.0);
+  EXPECT_EQ(orientStaticBound(32.0), detail::kOrientErrorBound * 8.0 * 64.0 * 64.0);
+  EXPECT_GT(orientStaticBound(0.0), 0.0);  // raised to 2^-400: no underflow to 0
+  EXPECT_TRUE(std::isinf(orientStaticBound(std::numeric_limits<double>::infinity())));
+  EXPECT_TRUE(std::isinf(orientStaticBound(std::numeric_limits<double>::quiet_NaN())));
+  EXPECT_TRUE(std::isinf(orientStaticBound(1e300)));
+  // An infinite bound never decides: the dynamic filter and the exact sum do.
+  EXPECT_EQ(orientSign({0, 0}, {1, 0}, {0, 1}, orientStaticBound(1e300)), 1);
 }
 
 TEST(Predicates, OrientSignOnEasyInputsAgreesWithThePlainOrientation) {
