@@ -1,6 +1,6 @@
 #include "hal/mock/mock_hal.hpp"
 
-#include "sim/world.hpp"
+#include "robot/unicycle.hpp"
 
 #include <algorithm>
 #include <cmath>

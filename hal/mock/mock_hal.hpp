@@ -5,7 +5,7 @@
 // set by hand. Not real-time safe in the script calls (tests only); read()/write() allocate
 // nothing once `max_commands` commands are recorded (the log is reserved up front).
 
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "hal/base.hpp"
 #include "hal/obstacles.hpp"
 

@@ -1,6 +1,6 @@
 #include "hal/socketcan/can_profile.hpp"
 
-#include "map/yaml_support.hpp"
+#include "io/yaml_support.hpp"
 
 #include <yaml-cpp/yaml.h>
 

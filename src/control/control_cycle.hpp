@@ -11,7 +11,7 @@
 // Everything is sized at construction; step() allocates nothing.
 
 #include "control/local_controller.hpp"
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
 #include "map/polygon_map.hpp"

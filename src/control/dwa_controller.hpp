@@ -13,7 +13,7 @@
 // compute() allocates nothing, takes no locks and throws nothing.
 
 #include "control/local_controller.hpp"
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "local/local_map.hpp"
 #include "planner/collision.hpp"
 

@@ -7,10 +7,10 @@
 //
 // compute() runs in the 30 Hz cycle: it must not allocate, lock or block.
 
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
-#include "planner/unicycle.hpp"
+#include "robot/unicycle.hpp"
 
 #include <span>
 

@@ -9,7 +9,7 @@
 // |a| <= a_max and |b| <= b_max, so the command is always one the robot can follow.
 
 #include "control/local_controller.hpp"
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 
 #include <array>
 #include <vector>

@@ -4,7 +4,7 @@
 #include "geometry/clipper_ops.hpp"
 #include "geometry/polygon.hpp"
 #include "geometry/splitmix64.hpp"
-#include "map/yaml_support.hpp"
+#include "io/yaml_support.hpp"
 
 #include <clipper.hpp>
 

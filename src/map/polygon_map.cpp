@@ -1,6 +1,6 @@
 #include "map/polygon_map.hpp"
 
-#include "map/yaml_support.hpp"
+#include "io/yaml_support.hpp"
 
 #include "geometry/polygon.hpp"
 

@@ -28,7 +28,7 @@
 #include "hal/depth_camera.hpp"
 #include "hal/obstacles.hpp"
 #include "map/polygon_map.hpp"
-#include "perception/camera_model.hpp"
+#include "hal/camera_model.hpp"
 #include "perception/static_map_mask.hpp"
 
 #include <array>

@@ -12,10 +12,10 @@
 // robot nor an obstacle moves more than a sample step between two of them, and the footprint
 // checked against D(t) is grown by that step, so a contact between samples is not missed.
 
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
-#include "planner/unicycle.hpp"
+#include "robot/unicycle.hpp"
 
 #include <array>
 #include <span>

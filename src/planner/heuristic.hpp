@@ -12,13 +12,13 @@
 // tree and rarely expands anything: the tree is the per-cycle structure all queries share.
 // The values are exactly the path-RTR values of the paper.
 
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
 #include "path/deadline.hpp"
 #include "path/minimal_construct.hpp"
 #include "planner/collision.hpp"
-#include "planner/unicycle.hpp"
+#include "robot/unicycle.hpp"
 
 #include <array>
 #include <cstdint>

@@ -8,13 +8,13 @@
 // All memory (node pool, queue, closed table) belongs to the planner and is sized at
 // construction; plan() allocates nothing.
 
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
 #include "planner/budget.hpp"
 #include "planner/collision.hpp"
 #include "planner/heuristic.hpp"
-#include "planner/unicycle.hpp"
+#include "robot/unicycle.hpp"
 
 #include <array>
 #include <cstdint>

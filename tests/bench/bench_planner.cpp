@@ -10,7 +10,7 @@
 
 #include "control/control_cycle.hpp"
 #include "map/generate.hpp"
-#include "sim/world.hpp"
+#include "world/world.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -6,8 +6,8 @@
 
 #include "app/cli_support.hpp"
 #include "map/polygon_map.hpp"
-#include "sim/experiment.hpp"
-#include "sim/experiment_plots.hpp"
+#include "experiment/experiment.hpp"
+#include "experiment/experiment_plots.hpp"
 
 #include <CLI/CLI.hpp>
 

@@ -6,19 +6,19 @@
 // Exit status: 0 on a completed run (reached or not), 2 on bad input with one line on stderr
 // naming the option or file and the value, 1 on an unexpected failure during the run.
 
-#include "sim/results_json.hpp"
+#include "experiment/results_json.hpp"
 #include "control/control_cycle.hpp"
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "geometry/polygon.hpp"
 #include "map/polygon_map.hpp"
 #include "planner/heuristic.hpp"
-#include "sim/experiment.hpp"
-#include "sim/footprint.hpp"
-#include "sim/multi_sim.hpp"
-#include "sim/multi_world.hpp"
-#include "sim/scenario.hpp"
-#include "sim/sim_runner.hpp"
-#include "sim/world.hpp"
+#include "experiment/experiment.hpp"
+#include "world/footprint.hpp"
+#include "experiment/multi_sim.hpp"
+#include "world/multi_world.hpp"
+#include "world/scenario.hpp"
+#include "experiment/sim_runner.hpp"
+#include "world/world.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 

@@ -1,11 +1,11 @@
 #include "app/staad/config.hpp"
 
-#include "map/yaml_support.hpp"
+#include "io/yaml_support.hpp"
 
 #include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
 #include "hal/obstacles.hpp"
-#include "perception/camera_model.hpp"
+#include "hal/camera_model.hpp"
 #include "perception/depth_obstacles.hpp"
 
 #include <yaml-cpp/yaml.h>

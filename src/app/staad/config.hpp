@@ -36,8 +36,8 @@
 //   debug: {faults: false}                   # true: the socket's fault-injection requests (tests)
 
 #include "control/control_cycle.hpp"
-#include "control/robot_profile.hpp"
-#include "hal/sim/sim_hal.hpp"
+#include "robot/robot_profile.hpp"
+#include "world/sim_hal.hpp"
 #include "hal/socketcan/can_profile.hpp"
 #include "hal/depth_camera.hpp"
 #include "map/polygon_map.hpp"

@@ -5,7 +5,7 @@
 #include "app/staad/depth_sensor.hpp"
 #include "app/staad/io_tasks.hpp"
 #include "app/staad/service.hpp"
-#include "hal/sim/sim_hal.hpp"
+#include "world/sim_hal.hpp"
 #include "hal/socketcan/can_transport.hpp"
 #include "hal/socketcan/socketcan_base.hpp"
 #include "rt/alloc_count.hpp"

@@ -1,6 +1,6 @@
 #include "app/staad/depth_sensor.hpp"
 
-#include "hal/sim/sim_hal.hpp"
+#include "world/sim_hal.hpp"
 
 #if defined(STAA_HAVE_OPENNI2)
 #include "hal/openni2/openni2_camera.hpp"

@@ -23,7 +23,7 @@
 #include "hal/base.hpp"
 #include "hal/depth_camera.hpp"
 #include "hal/obstacles.hpp"
-#include "hal/sim/sim_depth_camera.hpp"
+#include "world/sim_depth_camera.hpp"
 #include "map/polygon_map.hpp"
 #include "perception/depth_obstacles.hpp"
 #include "rt/triple_buffer.hpp"

@@ -4,8 +4,8 @@
 // walking towards the robot in a 2 m corridor, a mover crossing at right angles, and a gap
 // that closes in front of the robot and opens again.
 
-#include "control/robot_profile.hpp"
-#include "sim/scenario.hpp"
+#include "robot/robot_profile.hpp"
+#include "world/scenario.hpp"
 
 #include <string>
 

@@ -5,7 +5,7 @@
 #include "control/dwa_controller.hpp"
 #include "control/pd_controller.hpp"
 #include "map/generate.hpp"
-#include "sim/world.hpp"
+#include "world/world.hpp"
 
 #include "alloc_counter.hpp"
 #include "scenarios.hpp"

@@ -1,8 +1,8 @@
 #include "control/control_cycle.hpp"
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "map/generate.hpp"
-#include "sim/sim_runner.hpp"
-#include "sim/world.hpp"
+#include "experiment/sim_runner.hpp"
+#include "world/world.hpp"
 
 #include "scenarios.hpp"
 

@@ -2,7 +2,7 @@
 // hand-made local pictures (free space, a wall ahead, a person walking at the robot, the
 // limits), then the scenarios of the STAA* issue driven end to end through the control cycle.
 #include "control/dwa_controller.hpp"
-#include "sim/sim_runner.hpp"
+#include "experiment/sim_runner.hpp"
 
 #include "scenarios.hpp"
 

@@ -9,7 +9,7 @@
 #include "control/pd_controller.hpp"
 
 #include "path/polygon_set.hpp"
-#include "sim/sim_runner.hpp"
+#include "experiment/sim_runner.hpp"
 
 #include "scenarios.hpp"
 

@@ -1,7 +1,7 @@
 // The scenarios of the STAA* issue, each driven by the real control cycle through the
 // simulated world with the reproducible expansion budget (1,000 pops per cycle): the robot
 // must arrive, collide with nothing, and be quick enough.
-#include "sim/sim_runner.hpp"
+#include "experiment/sim_runner.hpp"
 
 #include "scenarios.hpp"
 

@@ -6,10 +6,10 @@
 
 #include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
-#include "hal/sim/sim_depth_camera.hpp"
+#include "world/sim_depth_camera.hpp"
 #include "perception/static_map_mask.hpp"
-#include "scenes.hpp"
-#include "sim/world.hpp"
+#include "depth_scenes.hpp"
+#include "world/world.hpp"
 
 #include <gtest/gtest.h>
 

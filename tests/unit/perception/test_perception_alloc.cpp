@@ -4,9 +4,9 @@
 
 #include "alloc_counter.hpp"
 #include "rt/clock.hpp"
-#include "hal/sim/sim_depth_camera.hpp"
-#include "scenes.hpp"
-#include "sim/world.hpp"
+#include "world/sim_depth_camera.hpp"
+#include "depth_scenes.hpp"
+#include "world/world.hpp"
 
 #include <gtest/gtest.h>
 

@@ -5,7 +5,7 @@
 // end) or the scripted MockBase.
 #include "app/staad/channels.hpp"
 #include "app/staad/io_tasks.hpp"
-#include "control/robot_profile.hpp"
+#include "robot/robot_profile.hpp"
 #include "hal/mock/mock_hal.hpp"
 #include "hal/socketcan/can_codec.hpp"
 #include "hal/socketcan/can_profile.hpp"

@@ -1,0 +1,189 @@
+#include "experiment/sim_runner.hpp"
+
+#include "viz/map_drawing.hpp"
+#include "viz/svg.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
+namespace staa {
+
+Distribution distributionOf(std::vector<double> values) {
+  Distribution d;
+  if (values.empty()) return d;
+  std::sort(values.begin(), values.end());
+  d.mean = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size());
+  d.p50 = values[values.size() / 2];
+  d.p99 = values[std::min(values.size() - 1, values.size() * 99 / 100)];
+  d.max = values.back();
+  return d;
+}
+
+SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
+  World world(scenario);
+  ControlCycle cycle(scenario.map, scenario.robot, options.control);
+  cycle.setGoal(scenario.goal);
+  cycle.setLocalController(options.controller);
+  DynamicObstacleSet obstacles(options.control.max_dynamic_obstacles);
+  std::vector<Polygon> mover_polys(world.moverCount());
+  std::vector<PolygonView> views(world.moverCount());
+  std::vector<Vec2> velocities(world.moverCount());
+
+  SimResult result;
+  std::vector<double> pops, succ, depth, plan_us, cycle_us, path_us;
+  int early = 0;
+  const double period = 1.0 / options.rate_hz;
+  const int cycles = static_cast<int>(std::ceil(options.duration_s * options.rate_hz - 1e-9));
+  if (!options.svg_dir.empty()) std::filesystem::create_directories(options.svg_dir);
+  for (int k = 0; k < cycles; ++k) {
+    for (std::size_t i = 0; i < world.moverCount(); ++i) {
+      mover_polys[i] = world.moverPolygon(i);
+      views[i] = mover_polys[i];
+      velocities[i] = world.moverVelocity(i);
+    }
+    obstacles.set(views, velocities);
+    const RobotState& rs = world.robot();
+    CycleInputs in;
+    in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
+    in.obstacles = &obstacles;
+    const PlannerBudget budget = options.budget_expansions
+                                     ? PlannerBudget::expansions(*options.budget_expansions)
+                                     : PlannerBudget::wallClock(static_cast<std::int64_t>(options.budget_ms * 1e6));
+    const CycleOutput out = cycle.step(in, budget);
+    result.trace.push_back(rs.pose);
+    if (out.planned) {
+      ++result.calls;
+      pops.push_back(out.plan.stats.pops);
+      succ.push_back(out.plan.stats.successors);
+      depth.push_back(out.plan.depth);
+      early += out.plan.outcome == PlanResult::Outcome::kFinished;
+      result.brakes += out.plan.outcome == PlanResult::Outcome::kBrake;
+      plan_us.push_back(static_cast<double>(out.plan_ns) * 1e-3);
+      cycle_us.push_back(static_cast<double>(out.path_ns + out.local_ns + out.plan_ns) * 1e-3);
+      path_us.push_back(static_cast<double>(out.path_ns) * 1e-3);
+      if (!options.svg_dir.empty() && options.controller == nullptr && k % std::max(1, options.svg_every) == 0) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%05d.svg", k);
+        writeFrame(options.svg_dir / name, world, cycle, out, obstacles);
+        ++result.frames_written;
+      }
+    }
+    if (options.on_cycle) options.on_cycle(world, out, k);
+    result.final_state = toString(out.state);
+    if (out.state == CycleState::kReached) {
+      result.reached_goal = true;
+      result.goals_reached = 1;
+      result.time_to_goal_s = world.time();
+      break;
+    }
+    world.step(period, out.v_cmd, out.w_cmd);
+  }
+  result.duration_s = world.time();
+  if (!result.reached_goal) result.time_to_goal_s = world.time();
+  result.collisions = world.collisionEpisodes();
+  result.min_clearance_m = world.minClearance();
+  result.final_pose = world.robot().pose;
+  result.expansions = distributionOf(pops);
+  result.successors = distributionOf(succ);
+  result.depth = distributionOf(depth);
+  result.plan_us = distributionOf(plan_us);
+  result.cycle_us = distributionOf(cycle_us);
+  result.path_us = distributionOf(path_us);
+  result.finished_early_ratio = result.calls > 0 ? static_cast<double>(early) / result.calls : 0.0;
+  return result;
+}
+
+void writeFrame(const std::filesystem::path& file, const World& world, ControlCycle& cycle, const CycleOutput& out,
+                const DynamicObstacleSet& obstacles) {
+  const LocalMap& local = cycle.localMap();
+  // Frame the local box with a margin: the paper's Fig. 1 view.
+  Box view{local.boxCorners()[0], local.boxCorners()[0]};
+  for (const Vec2& c : local.boxCorners()) {
+    view.min = view.min.cwiseMin(c);
+    view.max = view.max.cwiseMax(c);
+  }
+  view.min -= Vec2(1.0, 1.0);
+  view.max += Vec2(1.0, 1.0);
+  SvgCanvasOptions opt;
+  opt.px_per_m = 60.0;
+  opt.side_panel_px = 170.0;
+  SvgCanvas canvas(view, opt);
+  canvas.beginGroup(SvgStyle{}, true);
+  // Inflated obstacles M' (light) and real ones (dark).
+  canvas.polygons(cycle.pathPlanner().inflatedObstacles(), svgFill("#f4c7a1", 0.6));
+  canvas.polygons(world.map().obstacles, svgFill("#4a4a4a"));
+  // Occupied cells of the collision grid C and the costmap C' (blurred halo).
+  std::vector<Box> cells;
+  const int w = local.width(), h = local.height();
+  for (int j = 0; j < h; ++j) {
+    for (int i = 0; i < w; ++i) {
+      const float c = local.costmap()[static_cast<std::size_t>(j) * w + i];
+      if (c > 0.05f && !local.grid()[static_cast<std::size_t>(j) * w + i]) {
+        const Vec2 p = local.cellCenter(i, j);
+        cells.push_back(Box{p - Vec2(0.02, 0.02), p + Vec2(0.02, 0.02)});
+      }
+    }
+  }
+  canvas.rects(cells, svgFill("#e8867c", 0.35));
+  cells.clear();
+  for (int j = 0; j < h; ++j) {
+    for (int i = 0; i < w; ++i) {
+      if (local.grid()[static_cast<std::size_t>(j) * w + i]) {
+        const Vec2 p = local.cellCenter(i, j);
+        cells.push_back(Box{p - Vec2(0.025, 0.025), p + Vec2(0.025, 0.025)});
+      }
+    }
+  }
+  canvas.rects(cells, svgFill("#d9822b", 0.9));
+  // The local box.
+  canvas.polygon(std::span<const Vec2>(local.boxCorners().data(), 4), svgStroke("#1f5fa8", 1.5, "6 3"));
+  // The global path.
+  canvas.polyline(cycle.lastPath(), svgStroke("#1f9e4a", 2.0));
+  // The search tree.
+  std::vector<std::pair<Vec2, Vec2>> edges;
+  cycle.planner().forEachEdge([&](const UnicycleState& a, const UnicycleState& b) { edges.emplace_back(a.position(), b.position()); });
+  canvas.segments(edges, svgStroke("#7a7a7a", 0.6));
+  // Movers now, and predicted at 0.3 s steps to depth 3.
+  FixedPolygon pred;
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    canvas.polygon(obstacles.observed(k).view(), svgFill("#8e44ad", 0.8));
+    for (int d = 1; d <= 3; ++d) {
+      obstacles.predict(k, d * cycle.planner().config().dt, pred);
+      canvas.polygon(pred.view(), svgStroke("#8e44ad", 1.0, "3 2"));
+    }
+  }
+  // The chosen trajectory and the robot.
+  std::vector<Vec2> traj;
+  for (const UnicycleState& s : out.plan.trajectory) traj.push_back(s.position());
+  canvas.polyline(traj, svgStroke("#c0392b", 3.0));
+  Polygon body = world.footprint();
+  canvas.polygon(body, svgFill("#2c3e50", 0.85));
+  canvas.arrow(world.robot().pose, 0.5, svgStroke("#ffffff", 2.0));
+  const IntermediateGoal& g = local.intermediateGoal();
+  canvas.marker(g.pose.position(), 6.0, svgFill("#f1c40f"));
+  canvas.arrow(g.pose, 0.6, svgStroke("#b7950b", 2.0));
+  canvas.endGroup();
+  char caption[160];
+  std::snprintf(caption, sizeof caption, "t = %.2f s   v = %.2f m/s   pops %u   depth %d   %s", world.time(),
+                world.robot().v, out.plan.stats.pops, out.plan.depth, toString(out.plan.outcome));
+  canvas.textPx(Vec2(opt.margin_px, 14.0), caption, 12.0);
+  canvas.scaleBar();
+  const std::vector<LegendEntry> legend{
+      {"obstacle", svgFill("#4a4a4a"), LegendSymbol::kArea},
+      {"inflated (M')", svgFill("#f4c7a1", 0.6), LegendSymbol::kArea},
+      {"collision grid C", svgFill("#d9822b", 0.9), LegendSymbol::kArea},
+      {"costmap C'", svgFill("#e8867c", 0.35), LegendSymbol::kArea},
+      {"local box", svgStroke("#1f5fa8", 1.5, "6 3"), LegendSymbol::kLine},
+      {"global path", svgStroke("#1f9e4a", 2.0), LegendSymbol::kLine},
+      {"search tree", svgStroke("#7a7a7a", 0.6), LegendSymbol::kLine},
+      {"plan", svgStroke("#c0392b", 3.0), LegendSymbol::kLine},
+      {"mover, D(t)", svgFill("#8e44ad", 0.8), LegendSymbol::kArea},
+      {"G~", svgFill("#f1c40f"), LegendSymbol::kMarker},
+  };
+  canvas.legend(legend);
+  canvas.save(file);
+}
+
+}  // namespace staa

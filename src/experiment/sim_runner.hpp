@@ -1,0 +1,69 @@
+#pragma once
+// One robot driven by the control cycle through a simulated world (staa-sim without
+// --agents): the cycle sees the world's state and its movers (ground truth for now; the
+// perception seam is the DynamicObstacleSet it is handed), its command drives the world for
+// one control period, until the goal is reached or the time is up.
+
+#include "control/control_cycle.hpp"
+#include "world/world.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace staa {
+
+struct SimOptions {
+  double rate_hz = 30.0;
+  double duration_s = 60.0;
+  // Budget: a fixed number of queue pops (reproducible) or a wall-clock limit.
+  std::optional<std::uint32_t> budget_expansions;
+  double budget_ms = 19.0;
+  ControlConfig control;
+  // A baseline local controller in place of STAA* (not owned; null: STAA*).
+  LocalController* controller = nullptr;
+  std::filesystem::path svg_dir;  // empty: no frames
+  int svg_every = 15;             // cycles between frames
+  // Called after each cycle (progress, tests); may be empty.
+  std::function<void(const World&, const CycleOutput&, int cycle)> on_cycle;
+};
+
+struct Distribution {
+  double mean = 0.0, p50 = 0.0, p99 = 0.0, max = 0.0;
+};
+Distribution distributionOf(std::vector<double> values);
+
+struct SimResult {
+  bool reached_goal = false;
+  double time_to_goal_s = 0.0;   // when reached; otherwise the duration
+  int goals_reached = 0;
+  int collisions = 0;            // collision episodes
+  double min_clearance_m = 0.0;
+  double duration_s = 0.0;       // simulated time
+  std::string final_state;       // the cycle's state at the end
+  Pose2 final_pose;
+  // Planner statistics over the cycles that ran STAA*.
+  int calls = 0;
+  Distribution expansions;       // queue pops per call
+  Distribution successors;
+  Distribution depth;
+  double finished_early_ratio = 0.0;
+  int brakes = 0;
+  Distribution plan_us;          // STAA* only
+  Distribution cycle_us;         // path + local map + STAA*
+  Distribution path_us;
+  std::vector<Pose2> trace;      // the robot's pose every cycle
+  int frames_written = 0;
+};
+
+// Runs the scenario's robot from its start to its goal.
+SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options);
+
+// Writes one frame like the paper's Fig. 1 (map, local box, occupied grid cells, inflated
+// obstacles, search tree, chosen trajectory, G~, the movers and their predictions).
+void writeFrame(const std::filesystem::path& file, const World& world, ControlCycle& cycle, const CycleOutput& out,
+                const DynamicObstacleSet& obstacles);
+
+}  // namespace staa

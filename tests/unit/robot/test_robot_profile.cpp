@@ -1,0 +1,161 @@
+#include "robot/robot_profile.hpp"
+
+#include "geometry/polygon.hpp"
+#include "shared_dir.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+namespace staa {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string errorOf(const std::string& text, const std::string& source = "robot.yaml") {
+  try {
+    parseRobotProfile(text, source);
+  } catch (const ProfileError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no ProfileError for:\n" << text;
+  return "";
+}
+
+// A valid profile with one line replaced.
+std::string withLine(const std::string& footprint, const std::string& limits) {
+  return "format: staa-robot/1\nname: test\nfootprint: " + footprint + "\nlimits: " + limits + "\n";
+}
+const std::string kSquare = "[[0.3, 0.3], [-0.3, 0.3], [-0.3, -0.3], [0.3, -0.3]]";
+const std::string kLimits = "{v_max: 1.0, v_min: -0.5, w_max: 2.0, a_max: 1.0, b_max: 3.0}";
+
+TEST(RobotProfile, ShippedPaperAgentEqualsPaperAgentProfile) {
+  const RobotProfile loaded = loadRobotProfile(test::sourceDir() / "config/robots/paper-agent.yaml");
+  const RobotProfile paper = paperAgentProfile();
+  EXPECT_EQ(loaded.name, "paper-agent");
+  EXPECT_EQ(loaded.name, paper.name);
+  ASSERT_EQ(loaded.footprint.size(), 4u);
+  ASSERT_EQ(paper.footprint.size(), 4u);
+  for (std::size_t k = 0; k < 4; ++k) EXPECT_EQ(loaded.footprint[k], paper.footprint[k]) << "vertex " << k;
+  EXPECT_TRUE(isCounterClockwise(loaded.footprint));
+  EXPECT_DOUBLE_EQ(loaded.limits.v_max, 2.0);
+  EXPECT_DOUBLE_EQ(loaded.limits.v_min, -1.0);
+  EXPECT_DOUBLE_EQ(loaded.limits.w_max, 3.0);
+  EXPECT_DOUBLE_EQ(loaded.limits.a_max, 2.0);
+  EXPECT_DOUBLE_EQ(loaded.limits.b_max, 6.0);
+  // 0.8 m x 0.5 m, front 0.4 m wide: area = 0.8 * (0.4 + 0.5) / 2.
+  EXPECT_NEAR(signedArea(loaded.footprint), 0.36, 1e-12);
+  EXPECT_NEAR(loaded.circumradius(), std::hypot(0.4, 0.25), 1e-15);
+}
+
+TEST(RobotProfile, ShippedHsrIsARound16GonOfRadius0215) {
+  const RobotProfile hsr = loadRobotProfile(test::sourceDir() / "config/robots/hsr.yaml");
+  EXPECT_EQ(hsr.name, "hsr");
+  ASSERT_EQ(hsr.footprint.size(), 16u);
+  EXPECT_TRUE(isCounterClockwise(hsr.footprint));
+  for (const Vec2& p : hsr.footprint) EXPECT_NEAR(p.norm(), 0.215, 1e-6);
+  EXPECT_NEAR(hsr.circumradius(), 0.215, 1e-6);
+  EXPECT_NEAR(hsr.limits.v_max, 0.22, 1e-12);  // 0.8 km/h, rounded down
+  EXPECT_NEAR(hsr.limits.v_min, -0.22, 1e-12);
+  EXPECT_GT(hsr.limits.w_max, 0.0);
+  EXPECT_GT(hsr.limits.a_max, 0.0);
+  EXPECT_GT(hsr.limits.b_max, 0.0);
+}
+
+TEST(RobotProfile, ClockwiseFootprintIsStoredCounterClockwise) {
+  const RobotProfile p = parseRobotProfile(withLine("[[0.3, 0.3], [0.3, -0.3], [-0.3, -0.3], [-0.3, 0.3]]", kLimits), "cw.yaml");
+  EXPECT_TRUE(isCounterClockwise(p.footprint));
+  EXPECT_EQ(p.name, "test");
+  EXPECT_NEAR(p.circumradius(), std::hypot(0.3, 0.3), 1e-15);
+}
+
+TEST(RobotProfile, NameDefaultsToTheFileStem) {
+  const RobotProfile p = parseRobotProfile("format: staa-robot/1\nfootprint: " + kSquare + "\nlimits: " + kLimits, "/x/my-bot.yaml");
+  EXPECT_EQ(p.name, "my-bot");
+}
+
+TEST(RobotProfile, UnknownFormatNamesFileKeyAndValue) {
+  const std::string e = errorOf("format: staa-robot/2\nfootprint: " + kSquare + "\nlimits: " + kLimits, "bot.yaml");
+  EXPECT_THAT(e, HasSubstr("bot.yaml"));
+  EXPECT_THAT(e, HasSubstr("format"));
+  EXPECT_THAT(e, HasSubstr("staa-robot/2"));
+}
+
+TEST(RobotProfile, FootprintWithTwoVerticesIsRejected) {
+  const std::string e = errorOf(withLine("[[0.3, 0.3], [-0.3, -0.3]]", kLimits));
+  EXPECT_THAT(e, HasSubstr("robot.yaml: footprint"));
+  EXPECT_THAT(e, HasSubstr("has 2 vertices"));
+}
+
+TEST(RobotProfile, NonFiniteVertexIsRejected) {
+  const std::string e = errorOf(withLine("[[0.3, 0.3], [-0.3, .nan], [-0.3, -0.3], [0.3, -0.3]]", kLimits));
+  EXPECT_THAT(e, HasSubstr("footprint[1]"));
+  EXPECT_THAT(e, HasSubstr("not finite"));
+  EXPECT_THAT(e, HasSubstr("nan"));
+  const std::string e2 = errorOf(withLine("[[0.3, 0.3], [-0.3, abc], [-0.3, -0.3], [0.3, -0.3]]", kLimits));
+  EXPECT_THAT(e2, HasSubstr("footprint[1]"));
+  EXPECT_THAT(e2, HasSubstr("a list of 2 items"));
+}
+
+TEST(RobotProfile, SelfIntersectingFootprintIsRejected) {
+  // A bow tie through the origin.
+  const std::string e = errorOf(withLine("[[0.3, 0.3], [-0.3, -0.3], [-0.3, 0.3], [0.3, -0.3]]", kLimits));
+  EXPECT_THAT(e, HasSubstr("robot.yaml: footprint"));
+  EXPECT_THAT(e, HasSubstr("self-intersecting"));
+}
+
+TEST(RobotProfile, FootprintNotContainingTheOriginIsRejected) {
+  const std::string e = errorOf(withLine("[[1, 1], [2, 1], [2, 2], [1, 2]]", kLimits));
+  EXPECT_THAT(e, HasSubstr("robot.yaml: footprint"));
+  EXPECT_THAT(e, HasSubstr("origin"));
+  // On the boundary is not inside either.
+  EXPECT_THAT(errorOf(withLine("[[0, 0], [1, 0], [1, 1], [0, 1]]", kLimits)), HasSubstr("origin"));
+}
+
+TEST(RobotProfile, MissingLimitsAreRejected) {
+  EXPECT_THAT(errorOf("format: staa-robot/1\nfootprint: " + kSquare + "\n"), HasSubstr("robot.yaml: limits: missing"));
+  const std::string e = errorOf(withLine(kSquare, "{v_max: 1.0, v_min: -0.5, w_max: 2.0, a_max: 1.0}"));
+  EXPECT_THAT(e, HasSubstr("limits.b_max: missing"));
+}
+
+TEST(RobotProfile, EachBadLimitNamesKeyAndValue) {
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: -1, v_min: -0.5, w_max: 2.0, a_max: 1.0, b_max: 3.0}")),
+              HasSubstr("robot.yaml: limits.v_max: must be > 0, got -1"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 0, v_min: -0.5, w_max: 2.0, a_max: 1.0, b_max: 3.0}")),
+              HasSubstr("limits.v_max: must be > 0, got 0"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 1, v_min: 0.25, w_max: 2.0, a_max: 1.0, b_max: 3.0}")),
+              HasSubstr("limits.v_min: must be <= 0 (it is the backward limit), got 0.25"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 1, v_min: -0.5, w_max: 0, a_max: 1.0, b_max: 3.0}")),
+              HasSubstr("limits.w_max: must be > 0, got 0"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 1, v_min: -0.5, w_max: 2, a_max: -2, b_max: 3.0}")),
+              HasSubstr("limits.a_max: must be > 0, got -2"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 1, v_min: -0.5, w_max: 2, a_max: 1, b_max: -0.5}")),
+              HasSubstr("limits.b_max: must be > 0, got -0.5"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: .inf, v_min: -0.5, w_max: 2, a_max: 1, b_max: 3}")),
+              HasSubstr("limits.v_max: must be finite, got .inf"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: fast, v_min: -0.5, w_max: 2, a_max: 1, b_max: 3}")),
+              HasSubstr("limits.v_max: expected a number, got 'fast'"));
+  // A zero backward limit is allowed: a robot that cannot reverse.
+  EXPECT_NO_THROW(parseRobotProfile(withLine(kSquare, "{v_max: 1, v_min: 0, w_max: 2, a_max: 1, b_max: 3}"), "r.yaml"));
+}
+
+TEST(RobotProfile, UnknownKeysAreRejected) {
+  EXPECT_THAT(errorOf(withLine(kSquare, kLimits) + "wheelbase: 0.3\n"), HasSubstr("robot.yaml: wheelbase: unknown key"));
+  EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 1, v_min: -0.5, w_max: 2, a_max: 1, b_max: 3, j_max: 9}")),
+              HasSubstr("robot.yaml: limits.j_max: unknown key"));
+}
+
+TEST(RobotProfile, LoadNamesAMissingFile) {
+  try {
+    loadRobotProfile("/nonexistent/dir/robot.yaml");
+    FAIL() << "no error";
+  } catch (const ProfileError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("/nonexistent/dir/robot.yaml"));
+  }
+}
+
+}  // namespace
+}  // namespace staa
