@@ -121,8 +121,8 @@ void validateExperimentSpec(const ExperimentSpec& spec) {
   if (spec.jobs < 1) fail("jobs must be >= 1, got " + std::to_string(spec.jobs));
   if (!(spec.duration_s > 0.0) || !std::isfinite(spec.duration_s)) fail("duration must be > 0");
   if (!(spec.rate_hz > 0.0) || !std::isfinite(spec.rate_hz)) fail("rate must be > 0");
-  if (!spec.budget_expansions && !(spec.budget_ms > 0.0)) fail("budget_ms must be > 0");
-  if (spec.budget_expansions && *spec.budget_expansions == 0) fail("budget_expansions must be > 0");
+  if (!spec.budget.isExpansions() && !(spec.budget.ms > 0.0)) fail("budget_ms must be > 0");
+  if (spec.budget.isExpansions() && spec.budget.expansions == 0) fail("budget_expansions must be > 0");
 }
 
 std::vector<ExperimentRun> planExperiment(const ExperimentSpec& spec) {
@@ -192,8 +192,7 @@ std::vector<ExperimentRun> runExperiment(const ExperimentSpec& spec,
       o.controller = run.controller;
       o.duration_s = spec.duration_s;
       o.rate_hz = spec.rate_hz;
-      o.budget_expansions = spec.budget_expansions;
-      o.budget_ms = spec.budget_ms;
+      o.budget = spec.budget;
       o.seed = run.seed;
       o.control = spec.control;
       o.control.rate_hz = spec.rate_hz;
@@ -338,8 +337,7 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   s["runs"] = spec.runs;
   s["duration_s"] = spec.duration_s;
   s["rate_hz"] = spec.rate_hz;
-  s["budget"] = spec.budget_expansions ? Json{{"kind", "expansions"}, {"value", *spec.budget_expansions}}
-                                       : Json{{"kind", "wall_ms"}, {"value", spec.budget_ms}};
+  s["budget"] = budgetJson(spec.budget);
   s["heuristics"] = Json::array();
   for (const HeuristicKind h : spec.heuristics) s["heuristics"].push_back(toString(h));
   s["seed"] = spec.seed;

@@ -6,6 +6,7 @@
 // Tools only: allocates freely and starts threads.
 
 #include "control/control_cycle.hpp"
+#include "planner/budget.hpp"
 #include "robot/robot_profile.hpp"
 #include "map/goals.hpp"
 #include "map/polygon_map.hpp"
@@ -46,8 +47,7 @@ struct ExperimentSpec {
   double duration_s = 60.0;
   double rate_hz = 30.0;
   // Budget per STAA* call: queue pops (reproducible) or wall-clock milliseconds.
-  std::optional<std::uint32_t> budget_expansions;
-  double budget_ms = 19.0;
+  BudgetSpec budget;  // default: 19 ms of wall clock
   // STAA* runs once per heuristic (Fig. 6); PD and DWA do not use one and run once.
   std::vector<HeuristicKind> heuristics{HeuristicKind::kPathRtr};
   std::uint64_t seed = 1;  // run r of every cell uses seed + r

@@ -89,7 +89,7 @@ void validate(const PolygonMap& map, const MultiSimOptions& o) {
   if (!(o.duration_s >= 0.0) || !std::isfinite(o.duration_s)) fail("duration_s must be finite and >= 0");
   if (!(o.rate_hz > 0.0) || !std::isfinite(o.rate_hz)) fail("rate_hz must be finite and > 0");
   if (!(o.goal_radius_m > 0.0) || !std::isfinite(o.goal_radius_m)) fail("goal_radius_m must be finite and > 0");
-  if (!o.budget_expansions && (!(o.budget_ms > 0.0) || !std::isfinite(o.budget_ms))) fail("budget_ms must be > 0");
+  if (!o.budget.isExpansions() && (!(o.budget.ms > 0.0) || !std::isfinite(o.budget.ms))) fail("budget_ms must be > 0");
   const auto n = static_cast<std::size_t>(o.agents);
   if (!o.starts.empty() && o.starts.size() != n) {
     fail(std::to_string(o.starts.size()) + " start poses for " + std::to_string(n) + " agents");
@@ -270,9 +270,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       CycleInputs in;
       in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
       in.obstacles = a.perceives ? &a.seen : nullptr;
-      const PlannerBudget budget = options.budget_expansions
-                                       ? PlannerBudget::expansions(*options.budget_expansions)
-                                       : PlannerBudget::wallClock(static_cast<std::int64_t>(options.budget_ms * 1e6));
+      const PlannerBudget budget = options.budget.make();
       const CycleOutput out = a.cycle->step(in, budget);
       commands[i] = AgentCommand{out.v_cmd, out.w_cmd};
       a.last_speed = std::abs(rs.v);

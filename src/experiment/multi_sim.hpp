@@ -16,6 +16,7 @@
 // their motion and can always back away): sim/multi_world.hpp.
 
 #include "control/control_cycle.hpp"
+#include "planner/budget.hpp"
 #include "map/polygon_map.hpp"
 #include "planner/heuristic.hpp"
 #include "experiment/sim_runner.hpp"
@@ -44,8 +45,7 @@ struct MultiSimOptions {
   ControllerKind controller = ControllerKind::kStaa;
   double duration_s = 60.0;
   double rate_hz = 30.0;
-  std::optional<std::uint32_t> budget_expansions;  // else wall clock
-  double budget_ms = 19.0;
+  BudgetSpec budget;  // default: 19 ms of wall clock
   std::uint64_t seed = 1;          // start poses and goal sequences
   double goal_radius_m = 0.5;      // a goal counts as reached within this distance
   ControlConfig control;           // heuristic kind in control.staa.heuristic.kind

@@ -9,6 +9,18 @@
 
 namespace staa {
 
+// {"kind": "expansions" | "wall_ms", "value": pops or milliseconds}.
+inline nlohmann::ordered_json budgetJson(const BudgetSpec& b) {
+  nlohmann::ordered_json j;
+  j["kind"] = b.kindName();
+  if (b.isExpansions()) {
+    j["value"] = b.expansions;
+  } else {
+    j["value"] = b.ms;
+  }
+  return j;
+}
+
 // {"mean"?, "p50", "p99", "max"?} of a distribution.
 inline nlohmann::ordered_json distributionJson(const Distribution& d, bool with_mean, bool with_max) {
   nlohmann::ordered_json j;

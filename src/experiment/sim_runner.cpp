@@ -48,9 +48,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     CycleInputs in;
     in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
     in.obstacles = &obstacles;
-    const PlannerBudget budget = options.budget_expansions
-                                     ? PlannerBudget::expansions(*options.budget_expansions)
-                                     : PlannerBudget::wallClock(static_cast<std::int64_t>(options.budget_ms * 1e6));
+    const PlannerBudget budget = options.budget.make();
     const CycleOutput out = cycle.step(in, budget);
     result.trace.push_back(rs.pose);
     if (out.planned) {

@@ -5,6 +5,7 @@
 // one control period, until the goal is reached or the time is up.
 
 #include "control/control_cycle.hpp"
+#include "planner/budget.hpp"
 #include "world/world.hpp"
 
 #include <filesystem>
@@ -19,8 +20,7 @@ struct SimOptions {
   double rate_hz = 30.0;
   double duration_s = 60.0;
   // Budget: a fixed number of queue pops (reproducible) or a wall-clock limit.
-  std::optional<std::uint32_t> budget_expansions;
-  double budget_ms = 19.0;
+  BudgetSpec budget;  // default: 19 ms of wall clock
   ControlConfig control;
   // A baseline local controller in place of STAA* (not owned; null: STAA*).
   LocalController* controller = nullptr;

@@ -5,7 +5,9 @@
 
 #include "path/deadline.hpp"
 
+#include <cmath>
 #include <cstdint>
+#include <string>
 
 namespace staa {
 
@@ -60,6 +62,32 @@ class PlannerBudget {
   std::int64_t start_ns_ = 0;
   bool started_ = false;
   ClockFn clock_ = &steadyClockNs;
+};
+
+// A budget as configured and reported (config files, command lines, results.json): a
+// wall-clock limit per cycle or a number of queue pops. make() gives the search's
+// PlannerBudget; the same value is converted, named and written the same way everywhere.
+struct BudgetSpec {
+  enum class Kind : std::uint8_t { kWallClock, kExpansions };
+
+  static BudgetSpec wallClockMs(double ms) { return {Kind::kWallClock, ms, 0}; }
+  static BudgetSpec expansionsOf(std::uint32_t pops) { return {Kind::kExpansions, 0.0, pops}; }
+  // The paper's 19 ms of the 33 ms period at 30 Hz, scaled with the rate.
+  static BudgetSpec defaultWallClock(double rate_hz) { return wallClockMs(19.0 * 30.0 / rate_hz); }
+
+  bool isExpansions() const { return kind == Kind::kExpansions; }
+  std::int64_t limitNs() const { return std::llround(ms * 1e6); }
+  PlannerBudget make(ClockFn clock = &steadyClockNs) const {
+    return isExpansions() ? PlannerBudget::expansions(expansions) : PlannerBudget::wallClock(limitNs(), clock);
+  }
+  // "1000 expansions" or "19.00 ms".
+  std::string describe() const;
+  // The results' spelling of the kind: "expansions" or "wall_ms".
+  const char* kindName() const { return isExpansions() ? "expansions" : "wall_ms"; }
+
+  Kind kind = Kind::kWallClock;
+  double ms = 19.0;              // kWallClock: milliseconds per cycle
+  std::uint32_t expansions = 0;  // kExpansions: queue pops per cycle
 };
 
 }  // namespace staa

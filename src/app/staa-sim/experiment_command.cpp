@@ -33,8 +33,6 @@ using cli::InputError;
 
 constexpr int kExitBadInput = 2;
 constexpr int kExitRunFailed = 1;
-// The paper's wall-clock budget: 19 ms of a 33 ms period at 30 Hz; other rates scale it.
-constexpr double kDefaultBudgetMsAt30Hz = 19.0;
 
 std::vector<std::string> splitList(const std::string& option, const std::string& text) {
   std::vector<std::string> items;
@@ -212,12 +210,12 @@ int runCommand(int argc, char** argv) {
                      " exclude each other: give a wall-clock budget or an expansion budget, not both");
   }
   if (!budget_exp_text.empty()) {
-    spec.budget_expansions = static_cast<std::uint32_t>(parseCount(
-        "--budget-expansions", budget_exp_text, 1, std::numeric_limits<std::uint32_t>::max(), "queue pops per cycle"));
+    spec.budget = staa::BudgetSpec::expansionsOf(static_cast<std::uint32_t>(parseCount(
+        "--budget-expansions", budget_exp_text, 1, std::numeric_limits<std::uint32_t>::max(), "queue pops per cycle")));
   } else if (!budget_ms_text.empty()) {
-    spec.budget_ms = parsePositive("--budget-ms", budget_ms_text, "milliseconds per cycle");
+    spec.budget = staa::BudgetSpec::wallClockMs(parsePositive("--budget-ms", budget_ms_text, "milliseconds per cycle"));
   } else {
-    spec.budget_ms = kDefaultBudgetMsAt30Hz * 30.0 / spec.rate_hz;
+    spec.budget = staa::BudgetSpec::defaultWallClock(spec.rate_hz);
   }
 
   // Maps last among the checks: loading them is the slow part of validation.
@@ -264,8 +262,7 @@ int runCommand(int argc, char** argv) {
     std::cerr << "staa-sim experiment: " << total << " runs of " << fmt(spec.duration_s, 1) << " s ("
               << spec.maps.size() << (spec.maps.size() == 1 ? " map, " : " maps, ") << spec.runs
               << (spec.runs == 1 ? " run" : " runs") << " per cell, "
-              << (spec.budget_expansions ? std::to_string(*spec.budget_expansions) + " expansions"
-                                         : fmt(spec.budget_ms, 2) + " ms")
+              << spec.budget.describe()
               << " per STAA* cycle) on " << spec.jobs << (spec.jobs == 1 ? " thread\n" : " threads\n");
   }
 

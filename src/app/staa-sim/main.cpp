@@ -60,8 +60,6 @@ using staa::distributionJson;
 constexpr int kExitBadInput = 2;
 constexpr int kExitRunFailed = 1;
 
-// The paper's wall-clock budget: 19 ms of a 33 ms period at 30 Hz; other rates scale it.
-constexpr double kDefaultBudgetMsAt30Hz = 19.0;
 
 using staa::cli::InputError;
 
@@ -187,8 +185,7 @@ Json resultJson(const Request& rq, const staa::SimResult& r) {
   j["seed"] = rq.seed;
   j["rate_hz"] = o.rate_hz;
   j["duration_s"] = o.duration_s;
-  j["budget"] = o.budget_expansions ? Json{{"kind", "expansions"}, {"value", *o.budget_expansions}}
-                                    : Json{{"kind", "wall_ms"}, {"value", o.budget_ms}};
+  j["budget"] = staa::budgetJson(o.budget);
   j["heuristic"] = staa::toString(rq.heuristic);
   const Pose2& s = rq.scenario.start;
   const Pose2& g = rq.scenario.goal;
@@ -271,8 +268,7 @@ int simulate(Request& rq) {
               << fmtPose(rq.scenario.goal) << ", " << rq.scenario.movers.size()
               << (rq.scenario.movers.size() == 1 ? " mover, " : " movers, ") << rq.controller
               << " (" << staa::toString(rq.heuristic) << ", "
-              << (o.budget_expansions ? std::to_string(*o.budget_expansions) + " expansions"
-                                      : fmt(o.budget_ms, 2) + " ms")
+              << o.budget.describe()
               << " per cycle), " << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
     // One line per simulated second; the callback runs outside the timed cycle.
     const double rate = o.rate_hz;
@@ -464,8 +460,7 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
   j["seed"] = rq.seed;
   j["rate_hz"] = o.rate_hz;
   j["duration_s"] = o.duration_s;
-  j["budget"] = o.budget_expansions ? Json{{"kind", "expansions"}, {"value", *o.budget_expansions}}
-                                    : Json{{"kind", "wall_ms"}, {"value", o.budget_ms}};
+  j["budget"] = staa::budgetJson(o.budget);
   j["heuristic"] = staa::toString(rq.heuristic);
   // The agents start on goal locations and drive to random ones: no single start or goal.
   j["start"] = nullptr;
@@ -527,8 +522,7 @@ int simulateMulti(MultiRequest& rq) {
   if (!rq.quiet) {
     std::cerr << "staa-sim: " << rq.map.name << ": " << o.agents << (o.agents == 1 ? " agent, " : " agents, ")
               << rq.mode << ", " << rq.controller << " (" << staa::toString(rq.heuristic) << ", "
-              << (o.budget_expansions ? std::to_string(*o.budget_expansions) + " expansions"
-                                      : fmt(o.budget_ms, 2) + " ms")
+              << o.budget.describe()
               << " per cycle), " << rq.map.goals.size() << " goal locations, seed " << rq.seed << ", "
               << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
   }
@@ -698,12 +692,12 @@ int run(int argc, char** argv) {
                      " exclude each other: give a wall-clock budget or an expansion budget, not both");
   }
   if (!budget_exp_text.empty()) {
-    o.budget_expansions = static_cast<std::uint32_t>(parseCount(
-        "--budget-expansions", budget_exp_text, 1, std::numeric_limits<std::uint32_t>::max(), "queue pops per cycle"));
+    o.budget = staa::BudgetSpec::expansionsOf(static_cast<std::uint32_t>(parseCount(
+        "--budget-expansions", budget_exp_text, 1, std::numeric_limits<std::uint32_t>::max(), "queue pops per cycle")));
   } else if (!budget_ms_text.empty()) {
-    o.budget_ms = parsePositive("--budget-ms", budget_ms_text, "milliseconds per cycle");
+    o.budget = staa::BudgetSpec::wallClockMs(parsePositive("--budget-ms", budget_ms_text, "milliseconds per cycle"));
   } else {
-    o.budget_ms = kDefaultBudgetMsAt30Hz * 30.0 / o.rate_hz;
+    o.budget = staa::BudgetSpec::defaultWallClock(o.rate_hz);
   }
   o.svg_every = static_cast<int>(parseCount("--svg-every", svg_every_text, 1, 1'000'000, "cycles between frames"));
   o.svg_dir = svg_dir;
@@ -739,8 +733,7 @@ int run(int argc, char** argv) {
     staa::parseControllerKind(controller, m.controller);
     m.duration_s = o.duration_s;
     m.rate_hz = o.rate_hz;
-    m.budget_expansions = o.budget_expansions;
-    m.budget_ms = o.budget_ms;
+    m.budget = o.budget;
     m.seed = rq.seed;
     m.control = o.control;
     mr.robot = robot_file.empty() ? staa::paperAgentProfile() : staa::loadRobotProfile(robot_file);

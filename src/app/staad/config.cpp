@@ -226,8 +226,8 @@ void readBudget(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
   const YAML::Node budget = r.section(root, "budget", "budget", {"ms", "expansions"});
   if (!budget.IsDefined()) {
     // The built-in 19 ms fits 30 Hz; at a faster rate it would overrun every cycle.
-    if (!(config.budget_ms < period_ms)) {
-      r.fail(root, "budget", "missing, and the default " + number(config.budget_ms) + " ms does not fit the control period (" +
+    if (!(config.budget.ms < period_ms)) {
+      r.fail(root, "budget", "missing, and the default " + number(config.budget.ms) + " ms does not fit the control period (" +
                                  period + "): give budget.ms or budget.expansions");
     }
     return;
@@ -242,15 +242,14 @@ void readBudget(const Reader& r, const YAML::Node& root, DaemonConfig& config) {
     r.fail(Reader::keyOf(root, "budget"), "budget", "expected ms (wall clock) or expansions (reproducible), got neither");
   }
   if (ms.IsDefined()) {
-    config.budget_ms = r.finite(ms, "budget.ms");
+    config.budget = BudgetSpec::wallClockMs(r.finite(ms, "budget.ms"));
     // The planner's budget is part of the cycle: it must leave the rest of the cycle time.
-    if (!(config.budget_ms > 0.0 && config.budget_ms < period_ms)) {
+    if (!(config.budget.ms > 0.0 && config.budget.ms < period_ms)) {
       r.fail(ms, "budget.ms", "must be > 0 and shorter than the control period (" + period + "), got " + ms.Scalar());
     }
-    config.budget_expansions.reset();
   } else {
-    config.budget_expansions =
-        static_cast<std::uint32_t>(r.integer(expansions, "budget.expansions", 1, std::numeric_limits<std::uint32_t>::max()));
+    config.budget = BudgetSpec::expansionsOf(
+        static_cast<std::uint32_t>(r.integer(expansions, "budget.expansions", 1, std::numeric_limits<std::uint32_t>::max())));
   }
 }
 

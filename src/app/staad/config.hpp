@@ -92,8 +92,7 @@ struct DaemonConfig {
   double control_hz = 30.0;
   double base_hz = 100.0;
   double perception_hz = 30.0;
-  std::optional<std::uint32_t> budget_expansions;  // else budget_ms
-  double budget_ms = 19.0;
+  BudgetSpec budget;  // default: 19 ms of wall clock
   rt::ThreadSpec control_thread{"staad-control", 80, -1};
   rt::ThreadSpec base_thread{"staad-base", 85, -1};
   rt::ThreadSpec perception_thread{"staad-percept", 70, -1};

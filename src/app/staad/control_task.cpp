@@ -17,8 +17,7 @@ ControlConfig controlConfigOf(const DaemonConfig& config) {
 }
 
 PlannerBudget budgetOf(const DaemonConfig& config, ClockFn clock) {
-  if (config.budget_expansions) return PlannerBudget::expansions(*config.budget_expansions);
-  return PlannerBudget::wallClock(secondsToNanos(config.budget_ms * 1e-3), clock);
+  return config.budget.make(clock);
 }
 
 DaemonState fromCycleState(CycleState s) {

@@ -73,7 +73,7 @@ TEST(ControlCycle, ExpansionBudgetRunsAreReproducibleBitForBit) {
   const Scenario s = test::crossing();
   SimOptions o;
   o.duration_s = 6.0;
-  o.budget_expansions = 400;
+  o.budget = BudgetSpec::expansionsOf(400);
   const SimResult a = runSingleRobot(s, o);
   const SimResult b = runSingleRobot(s, o);
   ASSERT_EQ(a.trace.size(), b.trace.size());
@@ -96,7 +96,7 @@ TEST(ControlCycle, CrossesTheOfficeWithoutCollision) {
   s.goal = {25.5, 22.5, 0.0};
   SimOptions o;
   o.duration_s = 40.0;
-  o.budget_expansions = 600;
+  o.budget = BudgetSpec::expansionsOf(600);
   const SimResult r = runSingleRobot(s, o);
   EXPECT_TRUE(r.reached_goal) << r.final_state << " at " << r.final_pose.x << ", " << r.final_pose.y;
   EXPECT_EQ(r.collisions, 0);
@@ -115,7 +115,7 @@ TEST(ControlCycle, TheSlowHsrStartsFromStandstillAndTurnsIntoARoom) {
   s.goal = {4.5, 1.5, 0.0};
   SimOptions o;
   o.duration_s = 3.0;
-  o.budget_expansions = 300;
+  o.budget = BudgetSpec::expansionsOf(300);
   const SimResult r = runSingleRobot(s, o);
   const double moved = (r.final_pose.position() - s.start.position()).norm();
   EXPECT_GT(moved, 0.3);  // 3 s at up to 0.22 m/s after a 0.44 s ramp: about 0.6 m

@@ -212,7 +212,7 @@ SimResult drivePd(const Scenario& s, double duration_s, const PdConfig& config =
   PdController pd(s.robot, config);
   SimOptions o;
   o.duration_s = duration_s;
-  o.budget_expansions = 1000;  // unused by the PD; keeps the run reproducible either way
+  o.budget = BudgetSpec::expansionsOf(1000);  // unused by the PD; keeps the run reproducible either way
   o.controller = &pd;
   return runSingleRobot(s, o);
 }

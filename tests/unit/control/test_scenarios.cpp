@@ -18,7 +18,7 @@ struct Drive {
 Drive drive(const Scenario& s, double duration_s, double line_x = 1e9) {
   SimOptions o;
   o.duration_s = duration_s;
-  o.budget_expansions = 1000;
+  o.budget = BudgetSpec::expansionsOf(1000);
   Drive run;
   o.on_cycle = [&](const World& w, const CycleOutput&, int) {
     if (w.time() > 0.5 && w.robot().pose.x < line_x) run.min_speed_before_x = std::min(run.min_speed_before_x, std::abs(w.robot().v));

@@ -50,7 +50,7 @@ ExperimentSpec tinySpec() {
   spec.agents = {1};
   spec.runs = 2;
   spec.duration_s = 3.0;
-  spec.budget_expansions = 200;
+  spec.budget = BudgetSpec::expansionsOf(200);
   spec.jobs = 2;
   return spec;
 }

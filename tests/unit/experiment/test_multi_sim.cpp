@@ -37,7 +37,7 @@ MultiSimOptions officeOptions(std::uint64_t seed) {
   o.mode = SimMode::kCooperative;
   o.controller = ControllerKind::kStaa;
   o.duration_s = 12.0;  // long enough for goals; short for the ASan run in CI
-  o.budget_expansions = 300;
+  o.budget = BudgetSpec::expansionsOf(300);
   o.seed = seed;
   return o;
 }
@@ -50,7 +50,7 @@ MultiSimOptions scripted(SimMode mode, double duration_s, std::uint32_t budget, 
   o.mode = mode;
   o.controller = ControllerKind::kStaa;
   o.duration_s = duration_s;
-  o.budget_expansions = budget;
+  o.budget = BudgetSpec::expansionsOf(budget);
   o.starts = std::move(starts);
   o.goal_sequences = std::move(goals);
   return o;
@@ -329,7 +329,7 @@ TEST(MultiSim, DISABLED_FiveAgentsOneMinuteTiming) {
   MultiSimOptions o;
   o.agents = 5;
   o.duration_s = 60.0;
-  o.budget_expansions = 1000;
+  o.budget = BudgetSpec::expansionsOf(1000);
   const auto t0 = std::chrono::steady_clock::now();
   const MultiSimResult r = runMultiAgent(generateOfficeMap(), paperAgentProfile(), o);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

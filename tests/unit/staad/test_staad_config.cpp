@@ -147,8 +147,8 @@ TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
   EXPECT_DOUBLE_EQ(c.control_hz, 30.0);
   EXPECT_DOUBLE_EQ(c.base_hz, 100.0);
   EXPECT_DOUBLE_EQ(c.perception_hz, 30.0);
-  EXPECT_FALSE(c.budget_expansions.has_value());
-  EXPECT_DOUBLE_EQ(c.budget_ms, 19.0);
+  EXPECT_FALSE(c.budget.isExpansions());
+  EXPECT_DOUBLE_EQ(c.budget.ms, 19.0);
   EXPECT_EQ(c.control_thread.priority, 80);
   EXPECT_EQ(c.base_thread.priority, 85);
   EXPECT_EQ(c.perception_thread.priority, 70);
@@ -284,8 +284,8 @@ TEST_F(ConfigFiles, BudgetInMillisecondsAndExpansionsTogetherIsRejected) {
 
 TEST_F(ConfigFiles, ExpansionBudgetReplacesTheWallClock) {
   const DaemonConfig c = loadDaemonConfig(write("staad.yaml", edited("ms: 19", "expansions: 1000")));
-  ASSERT_TRUE(c.budget_expansions.has_value());
-  EXPECT_EQ(*c.budget_expansions, 1000u);
+  ASSERT_TRUE(c.budget.isExpansions());
+  EXPECT_EQ(c.budget.expansions, 1000u);
 }
 
 TEST_F(ConfigFiles, BudgetMustFitTheControlPeriod) {
@@ -295,7 +295,7 @@ TEST_F(ConfigFiles, BudgetMustFitTheControlPeriod) {
   EXPECT_THAT(error, HasSubstr("10 ms at control_hz 100"));
   EXPECT_THAT(error, HasSubstr("got 19"));
   const DaemonConfig c = loadDaemonConfig(write("fast.yaml", edited("ms: 19", "ms: 6", edited("control_hz: 30", "control_hz: 100"))));
-  EXPECT_DOUBLE_EQ(c.budget_ms, 6.0);
+  EXPECT_DOUBLE_EQ(c.budget.ms, 6.0);
   EXPECT_DOUBLE_EQ(c.control.rate_hz, 100.0);
 }
 
@@ -318,7 +318,7 @@ sim: {start: [1.5, 4.5, 0.0]}
   const DaemonConfig defaults;
   EXPECT_EQ(c.hal, "sim");
   EXPECT_DOUBLE_EQ(c.control_hz, defaults.control_hz);
-  EXPECT_DOUBLE_EQ(c.budget_ms, defaults.budget_ms);
+  EXPECT_DOUBLE_EQ(c.budget.ms, defaults.budget.ms);
   EXPECT_EQ(c.socket_path, defaults.socket_path);
   EXPECT_EQ(c.socket_mode, defaults.socket_mode);
   EXPECT_EQ(c.sim.movers, hal::SimHalConfig{}.movers);
