@@ -187,7 +187,8 @@ class StaaStar {
   std::uint32_t generation_ = 0;
   int closed_w_ = 0, closed_h_ = 0, closed_t_ = 0;
   double inv_closed_xy_ = 20.0, inv_two_pi_ = 0.0;
-  // This cycle's box (the closed table's frame).
+  // This cycle's box (the closed table's frame), rounded as it always was here (see
+  // CollisionChecker::prepare on why not LocalMap::frameAt).
   double box_x_ = 0.0, box_y_ = 0.0, box_c_ = 1.0, box_s_ = 0.0, box_behind_ = 0.0, box_side_ = 0.0;
   // Per expansion: for each angular acceleration, the end and mid angular velocities and the
   // cosine and sine of the rotation over dt.
