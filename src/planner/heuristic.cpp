@@ -66,8 +66,8 @@ double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta
 }
 
 Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, const std::vector<Polygon>& inflated_static,
-                     const LocalMapConfig& local)
-    : config_(config), limits_(limits) {
+                     const LocalMapConfig& local, std::size_t max_obstacles)
+    : config_(config), limits_(limits), inflated_(3 * max_obstacles), views_(max_obstacles) {
   config_.dynamic_depth = std::clamp(config_.dynamic_depth, 0, 3);
   MinimalConstruct::Options opt;
   opt.max_dynamic_polygons = views_.size();

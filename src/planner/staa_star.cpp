@@ -36,13 +36,13 @@ StaaConfig adaptedConfig(StaaConfig c, const MotionLimits& limits) {
 }  // namespace
 
 StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const std::vector<Polygon>& inflated_static,
-                   const LocalMapConfig& local)
+                   const LocalMapConfig& local, std::size_t max_obstacles)
     : config_(adaptedConfig(config, robot.limits)),
       limits_(robot.limits),
       actions_(robot.limits, config.notches),
       collision_(robot, local),
-      heuristic_(config.heuristic, robot.limits, inflated_static, local),
-      braking_obstacles_(64) {
+      heuristic_(config.heuristic, robot.limits, inflated_static, local, max_obstacles),
+      braking_obstacles_(max_obstacles) {
   braking_obstacles_.setBraking(config_.obstacle_reaction_s, config_.obstacle_brake_decel);
   root_ok_.assign(actions_.size(), 1);
   root_clear_.assign(actions_.size(), 0.0);

@@ -117,8 +117,9 @@ Action brakeAction(const UnicycleState& s, const MotionLimits& limits, double dt
 
 class StaaStar {
  public:
+  // `max_obstacles`: the cycle's moving-obstacle capacity (ControlConfig::max_moving_obstacles).
   StaaStar(const StaaConfig& config, const RobotProfile& robot, const std::vector<Polygon>& inflated_static,
-           const LocalMapConfig& local);
+           const LocalMapConfig& local, std::size_t max_obstacles = kDefaultMovingObstacleCapacity);
 
   // Plans from `start` (in the local map's frame: world) to the local map's G~. The local map
   // must be updated for this cycle. `obstacles` holds D at the cycle's time (t = 0).

@@ -12,7 +12,7 @@ rt::Nanos secondsToNanos(double s) { return static_cast<rt::Nanos>(std::llround(
 ControlConfig controlConfigOf(const DaemonConfig& config) {
   ControlConfig c = config.control;
   c.rate_hz = config.control_hz;
-  c.max_dynamic_obstacles = hal::ObstacleFrame::kMaxObstacles;
+  c.max_moving_obstacles = hal::ObstacleFrame::kMaxObstacles;
   return c;
 }
 
@@ -75,7 +75,7 @@ ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, ClockFn
       budget_(budgetOf(config, planner_clock)),
       limits_(config.robot.limits),
       cycle_(config.map, config.robot, controlConfigOf(config)),
-      obstacles_(hal::ObstacleFrame::kMaxObstacles) {}
+      obstacles_(cycle_.obstacleCapacity()) {}
 
 void ControlTask::log(rt::Nanos now, rt::LogLevel level, const char* message, double a, double b, double c,
                       std::uint8_t count) {

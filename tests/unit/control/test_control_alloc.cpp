@@ -45,7 +45,7 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
     ControlCycle cycle(s.map, s.robot, config);
     cycle.setLocalController(variant.baseline);
     cycle.setGoal(s.goal);
-    DynamicObstacleSet obstacles(config.max_dynamic_obstacles);
+    DynamicObstacleSet obstacles(config.max_moving_obstacles);
     std::vector<Polygon> polys(world.moverCount());
     std::vector<PolygonView> views(world.moverCount());
     std::vector<Vec2> velocities(world.moverCount());
