@@ -8,8 +8,9 @@
 //
 // On the activity's thread, in order: the loop is created (deadline 0 = now + period; its
 // histograms are allocated here), Runnable::start(loop), the thread marks itself real-time
-// (rt/alloc_count.hpp), then wait / step(woke) / finish until stop is asked, one last step
-// after the wake-up that sees it, then Runnable::stop(now) and the real-time mark is cleared.
+// (rt/alloc_count.hpp); then, until a stop is asked, wait for the deadline, step(woke),
+// finish (a stop asked during the sleep lets that cycle run); then Runnable::stop(now), and
+// the real-time mark is cleared.
 
 #include "rt/clock.hpp"
 #include "rt/periodic.hpp"
@@ -56,7 +57,7 @@ class PeriodicActivity {
   PeriodicActivity& operator=(const PeriodicActivity&) = delete;
   ~PeriodicActivity();  // stops and joins
 
-  // Starts the thread with `spec` and returns once it runs with the attributes it got
+  // Starts the thread with `spec` (once) and returns once it runs with the attributes it got
   // (warning() says what was refused). Throws std::system_error when it cannot start.
   void start(const ThreadSpec& spec);
   // Asks the thread to end after the cycle it is in or sleeping toward (returns at once).
