@@ -1,12 +1,12 @@
 #pragma once
-// The robot base as the control code sees it (ARCHITECTURE.md section 4), shaped like
+// The robot base as the control code sees it (docs/ARCHITECTURE.md section 4), shaped like
 // ros2_control's hardware interface: the base I/O thread calls read(now) to take in what the
 // hardware sent (odometry, velocities, status, faults) and write(now, command) to send the
 // latest velocity command. An implementation is used by that one thread only; the daemon
 // passes odometry and commands to the other threads through triple buffers.
 //
-// Implementations: hal/sim (the simulator's world), hal/mock (scripted, for tests); the
-// SocketCAN driver comes later as a base driver over a transport opened by file descriptor.
+// Implementations: the simulated base (src/world/sim_hal.hpp), hal/mock (scripted, for
+// tests), hal/socketcan (a base driver over a CAN transport opened by file descriptor).
 // read() and write() never allocate, lock or block beyond a non-blocking poll of their
 // transport.
 

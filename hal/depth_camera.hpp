@@ -1,7 +1,8 @@
 #pragma once
-// A depth camera (ARCHITECTURE.md section 4): 640 x 480 depth frames of 16-bit millimetres
-// at 30 Hz, its intrinsics and its pose on the robot. The OpenNI2 backend (the HSR's head
-// Xtion) comes later; perception turns frames into an ObstacleFrame (hal/obstacles.hpp).
+// A depth camera (docs/ARCHITECTURE.md section 4): 640 x 480 depth frames of 16-bit millimetres
+// at 30 Hz, its intrinsics and its pose on the robot. Backends: hal/openni2 (the HSR's head
+// Xtion), the simulated camera (src/world/sim_depth_camera.hpp); perception (src/perception)
+// turns frames into an ObstacleFrame (hal/obstacles.hpp).
 
 #include "rt/clock.hpp"
 

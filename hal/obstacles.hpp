@@ -2,8 +2,7 @@
 // What perception hands the control thread each frame: the moving (and unmapped) obstacles
 // around the robot as polygons in the map frame with velocities, fixed capacity, passed by
 // a triple buffer. The sim backend fills it from the simulator's ground truth; a depth
-// camera fills it through perception (src/perception, later). Staleness is judged from
-// `stamp`.
+// camera fills it through perception (src/perception). Staleness is judged from `stamp`.
 
 #include "geometry/types.hpp"
 #include "rt/clock.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// The clock the runtime runs on, injected (ARCHITECTURE.md section 3): the daemon uses the
+// The clock the runtime runs on, injected (docs/ARCHITECTURE.md section 3): the daemon uses the
 // monotonic clock and sleeps on absolute deadlines; tests use a manual clock and step it, so
 // a periodic thread runs thousands of cycles deterministically in lockstep.
 

@@ -1,5 +1,5 @@
 #pragma once
-// A periodic schedule on absolute deadlines (ARCHITECTURE.md section 3): deadline k is
+// A periodic schedule on absolute deadlines (docs/ARCHITECTURE.md section 3): deadline k is
 // start + k * period. After a cycle's body the next deadline is the first one still in the
 // future: when the body ran past one or more deadlines, an overrun is counted and the missed
 // periods are skipped (no burst of catch-up cycles). Every missed deadline is attributed:

@@ -1,5 +1,5 @@
 #pragma once
-// Real-time set-up of the process and its threads (ARCHITECTURE.md section 3), in the order
+// Real-time set-up of the process and its threads (docs/ARCHITECTURE.md section 3), in the order
 // the daemon calls it: (1) config loaded and every workspace created, (2) lockMemory(),
 // (3) threads started (RtThread, or a PeriodicActivity that owns one), (4) READY=1. Every
 // pthread_* return code is checked as a return value (they do not set errno).

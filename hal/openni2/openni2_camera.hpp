@@ -1,5 +1,5 @@
 #pragma once
-// The HSR's head Xtion (ARCHITECTURE.md section 4, `openni2`) through OpenNI2
+// The HSR's head Xtion (docs/ARCHITECTURE.md section 4, `openni2`) through OpenNI2
 // (libopenni2-dev): 640 x 480 depth at 30 Hz in PIXEL_FORMAT_DEPTH_1_MM.
 //
 // OpenNI2 delivers frames on its own thread through a frame listener; the listener copies

@@ -1,5 +1,5 @@
 #pragma once
-// The HSR base over CAN (ARCHITECTURE.md section 4): a hal::Base over a CanTransport that
+// The HSR base over CAN (docs/ARCHITECTURE.md section 4): a hal::Base over a CanTransport that
 // speaks a CanProfile (config/can/hsr_base.yaml).
 //
 // read(now) drains the pending frames, drops bad ones (counted by kind), tracks each ID's

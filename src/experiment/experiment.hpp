@@ -2,7 +2,7 @@
 // The paper's statistical experiment (Sec. IV-B and IV-C, Fig. 5 and 6) as one object: the
 // matrix maps x controllers x modes x agent counts x heuristics x runs, each run an
 // independent multi-agent simulation (runMultiAgent) seeded base seed + run index, run in
-// parallel over worker threads, and its results.json (ARCHITECTURE.md section 6).
+// parallel over worker threads, and its results.json (docs/ARCHITECTURE.md section 6).
 // Tools only: allocates freely and starts threads.
 
 #include "control/control_cycle.hpp"

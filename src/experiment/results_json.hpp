@@ -1,6 +1,6 @@
 #pragma once
 // JSON of the simulator's result figures, shared by `staa-sim --json` and the experiment's
-// results.json so that both spell the ARCHITECTURE.md section 6 keys the same way.
+// results.json so that both spell the docs/ARCHITECTURE.md section 6 keys the same way.
 
 #include "experiment/multi_sim.hpp"
 #include "experiment/sim_runner.hpp"
@@ -31,7 +31,7 @@ inline nlohmann::ordered_json distributionJson(const Distribution& d, bool with_
   return j;
 }
 
-// The "planner" object of ARCHITECTURE.md section 6 (one run, one robot or several agents).
+// The "planner" object of docs/ARCHITECTURE.md section 6 (one run, one robot or several agents).
 inline nlohmann::ordered_json plannerJson(int calls, const Distribution& expansions, const Distribution& successors,
                                           double finished_early_ratio, double depth_mean, const Distribution& plan_us) {
   nlohmann::ordered_json planner;
@@ -44,7 +44,7 @@ inline nlohmann::ordered_json plannerJson(int calls, const Distribution& expansi
   return planner;
 }
 
-// The "contacts" list of a multi-agent run (not in ARCHITECTURE.md section 6 yet): one object
+// The "contacts" list of a multi-agent run (not in docs/ARCHITECTURE.md section 6 yet): one object
 // per counted contact episode; "other" and the tiers are null for the map and for no plan.
 inline nlohmann::ordered_json contactsJson(const std::vector<ContactRecord>& contacts) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();

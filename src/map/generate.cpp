@@ -10,11 +10,11 @@
 namespace staa {
 namespace {
 
-// Axis-aligned box x0-x1 by y0-y1 as a counter-clockwise polygon (PAPER-MAPS.md gives every
+// Axis-aligned box x0-x1 by y0-y1 as a counter-clockwise polygon (the paper's set-up gives every
 // wall and piece of furniture in this form).
 Polygon box(double x0, double x1, double y0, double y1) { return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}; }
 
-// ---- office (PAPER-MAPS.md, "Office") ----
+// ---- office (docs/paper-worlds.md, "Office") ----
 
 constexpr double kCell = 3.0;          // 9 x 9 grid of 3 m cells
 constexpr double kWall = 0.12;         // walls lie inside the room's cell along its edges
@@ -52,7 +52,7 @@ void addRoomWithGoal(PolygonMap& map, int i, int j, Side door) {
   map.goals.push_back({kCell * i + 0.5 * kCell, kCell * j + 0.5 * kCell});
 }
 
-// ---- clutter (PAPER-MAPS.md, "Clutter") ----
+// ---- clutter (docs/paper-worlds.md, "Clutter") ----
 
 // Uniform in [a, b) from the top 53 bits of one mt19937_64 draw. std::mt19937_64's output
 // is fixed by the standard, unlike std::uniform_real_distribution's, so a seed gives the
@@ -104,7 +104,7 @@ PolygonMap generateApartmentMap() {
   map.name = "apartment";
   // The outer walls' extent: 0-24.4 x 0-20.4 (a 12 x 10 m plan scaled 2x, walls 0.4 m).
   map.bounds = Box{{0.0, 0.0}, {24.4, 20.4}};
-  // x0, x1, y0, y1 exactly as PAPER-MAPS.md lists them: outer walls, inner walls, furniture.
+  // x0, x1, y0, y1 exactly as the paper's published set-up lists them (docs/paper-worlds.md): outer walls, inner walls, furniture.
   constexpr double kBoxes[][4] = {
       // outer walls
       {24, 24.4, 0.2, 20.2}, {0, 0.4, 0.2, 20.2}, {0.2, 24.2, 0, 0.4}, {0.2, 24.2, 20, 20.4},

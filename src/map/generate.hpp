@@ -1,5 +1,5 @@
 #pragma once
-// The paper's three evaluation worlds (../shared/design/PAPER-MAPS.md): office, apartment,
+// The paper's three evaluation worlds (docs/paper-worlds.md): office, apartment,
 // clutter, each with its goal locations.
 
 #include "map/polygon_map.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// The static polygon map M (ARCHITECTURE.md section 6, format `staa-polygon-map/1`).
+// The static polygon map M (docs/ARCHITECTURE.md section 6, format `staa-polygon-map/1`).
 
 #include "geometry/types.hpp"
 

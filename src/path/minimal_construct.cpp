@@ -400,6 +400,141 @@ std::int32_t MinimalConstruct::addTargetNode(const Vec2& start) {
   return kTarget;
 }
 
+bool MinimalConstruct::startIsNextPop(bool use_dynamic, Result& result) {
+  Node& t = nodes_[static_cast<std::size_t>(target_)];
+  if (t.state != kOpen) return false;
+  // Is some open node's true key g + |node - start| below the start's g? The heap's keys
+  // were made for the anchor; moving the start by |start - anchor| lowers no true key by
+  // more than that, so the top key minus it bounds them all (no scan). Else scan: only
+  // nodes with g below the start's can be lower, and no square root is needed.
+  double top = kInf;
+  for (std::size_t i = 0; i < std::min<std::size_t>(3, heap_.size()); ++i) {
+    if (heap_[i] != target_) top = std::min(top, nodes_[static_cast<std::size_t>(heap_[i])].f);
+  }
+  bool lower = t.g > top - (target_pos_ - key_anchor_).norm();
+  if (lower) {
+    lower = false;
+    for (const std::int32_t n : heap_) {
+      const Node& o = nodes_[static_cast<std::size_t>(n)];
+      const double slack = t.g - o.g;
+      if (n == target_ || slack <= 0.0) continue;
+      if ((target_pos_ - o.pos).squaredNorm() < slack * slack) {
+        lower = true;
+        break;
+      }
+    }
+  }
+  if (lower) return false;
+  ++edge_checks_;
+  const Vec2& u = nodes_[static_cast<std::size_t>(t.parent)].pos;
+  if (!staticFree(u, t.pos) || (use_dynamic && dynamic_.segmentBlocked(u, t.pos))) return false;
+  heapRemove(target_);
+  t.state = kClosed;
+  closed_.push_back(target_);
+  ++result.expansions;
+  return true;
+}
+
+bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, Result& result) {
+  // Retire the previous start: it was never expanded, so nothing hangs below it, and its
+  // node takes the new start.
+  if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
+  if (!closed_.empty() && closed_.back() == kTarget) closed_.pop_back();
+  target_ = addTargetNode(start);
+  for (const std::int32_t c : closed_) relax(c, target_);
+  // The common case, without touching the heap: the new start's best connection to the
+  // tree is at least as short as anything still open (true keys, computed by a scan) and
+  // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
+  if (startIsNextPop(use_dynamic, result)) return true;
+  // Re-key the open list for the new start (the heuristic changed) and restore the heap.
+  for (const std::int32_t n : heap_) {
+    Node& node = nodes_[static_cast<std::size_t>(n)];
+    node.f = node.g + (target_pos_ - node.pos).norm();
+  }
+  for (std::size_t i = heap_.size() / 2; i-- > 0;) heapDown(i);
+  key_anchor_ = target_pos_;
+  return false;
+}
+
+void MinimalConstruct::plantTree(const Vec2& start, const Vec2& goal, bool use_dynamic) {
+  resetSearch(goal, use_dynamic);
+  target_ = addTargetNode(start);
+  Node& root = nodes_[0];
+  root.pos = goal;
+  root.g = 0.0;
+  root.f = (start - goal).norm();
+  key_anchor_ = start;
+  root.state = kOpen;
+  heapPush(0);
+  tree_valid_ = true;
+  tree_with_dynamic_ = use_dynamic;
+  tree_goal_ = goal;
+}
+
+bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
+  const Node& node = nodes_[static_cast<std::size_t>(v)];
+  const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
+  ++edge_checks_;
+  std::size_t nb =
+      oracle_ != nullptr && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
+  if (use_dynamic) {
+    const std::size_t ns_poly = static_.polygonCount();
+    const std::size_t nd = dynamic_.segmentBlockers(u, node.pos, std::span<std::uint32_t>(blockers_).subspan(nb));
+    for (std::size_t i = nb; i < nb + nd; ++i) blockers_[i] += static_cast<std::uint32_t>(ns_poly);
+    nb += nd;
+  }
+  if (nb == 0) return true;
+  markEdgeBlocked(node.parent, v);
+  for (std::size_t i = 0; i < nb; ++i) discoverPolygon(blockers_[i], use_dynamic);
+  repairParent(v);
+  return false;
+}
+
+void MinimalConstruct::close(std::int32_t v) {
+  Node& node = nodes_[static_cast<std::size_t>(v)];
+  node.state = kClosed;
+  if (node.vertex != kNone && node.parent != kNone) {
+    const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
+    int side = orientSign(u, node.pos, node.prev, orient_bound_);
+    if (side == 0) side = orientSign(u, node.pos, node.next, orient_bound_);
+    node.turn = static_cast<std::int8_t>(side);
+  }
+  closed_.push_back(v);
+}
+
+MinimalConstruct::Status MinimalConstruct::search(bool use_dynamic, const Deadline& deadline, Result& result) {
+  std::uint32_t until_check = 0;
+  while (!heap_.empty()) {
+    if (until_check-- == 0) {
+      // On abort the tree stays valid (closed nodes keep exact distances, the open list is
+      // intact; the start is re-attached by the next query), so a later query resumes here.
+      if (deadline.passed()) return Status::kAborted;
+      until_check = 15;
+    }
+    const std::int32_t v = heapPop();
+    // The lazy step: only now is the edge into v checked against the obstacles.
+    if (nodes_[static_cast<std::size_t>(v)].parent != kNone && !edgeIntoFree(v, use_dynamic)) continue;
+    close(v);
+    ++result.expansions;
+    if (v == target_) return Status::kFound;
+    expand(v);
+  }
+  return Status::kNoPath;
+}
+
+void MinimalConstruct::tracePath(const Vec2& start_in, const Vec2& goal_in, Result& result) {
+  // Parents lead from the start to the goal: the path comes out in driving order.
+  if (result.start_moved) path_.push_back(start_in);
+  for (std::int32_t n = target_; n != kNone; n = nodes_[static_cast<std::size_t>(n)].parent) {
+    path_.push_back(nodes_[static_cast<std::size_t>(n)].pos);
+  }
+  if (result.goal_moved) path_.push_back(goal_in);
+  double length = 0.0;
+  for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
+  result.path = path_;
+  result.length = length;
+}
+
 MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec2& goal_in, bool with_dynamic,
                                                  const Deadline& deadline) {
   Result result;
@@ -428,147 +563,16 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
   // A kept tree is valid for the same goal and the same obstacles (static, or static plus
   // the dynamic set it was grown with: setDynamicObstacles invalidates it).
   const bool reuse = tree_valid_ && goal == tree_goal_ && use_dynamic == tree_with_dynamic_;
-  bool found_fast = false;
+  bool found = false;
   if (reuse) {
-    // Retire the previous start: it was never expanded, so nothing hangs below it, and its
-    // node takes the new start.
-    if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
-    if (!closed_.empty() && closed_.back() == kTarget) closed_.pop_back();
-    target_ = addTargetNode(start);
-    for (const std::int32_t c : closed_) relax(c, target_);
-    // The common case, without touching the heap: the new start's best connection to the
-    // tree is at least as short as anything still open (true keys, computed by a scan) and
-    // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
-    Node& t = nodes_[static_cast<std::size_t>(target_)];
-    bool done = false;
-    if (t.state == kOpen) {
-      // Is some open node's true key g + |node - start| below the start's g? The heap's keys
-      // were made for the anchor; moving the start by |start - anchor| lowers no true key by
-      // more than that, so the top key minus it bounds them all (no scan). Else scan: only
-      // nodes with g below the start's can be lower, and no square root is needed.
-      double top = kInf;
-      for (std::size_t i = 0; i < std::min<std::size_t>(3, heap_.size()); ++i) {
-        if (heap_[i] != target_) top = std::min(top, nodes_[static_cast<std::size_t>(heap_[i])].f);
-      }
-      bool lower = t.g > top - (target_pos_ - key_anchor_).norm();
-      if (lower) {
-        lower = false;
-        for (const std::int32_t n : heap_) {
-          const Node& o = nodes_[static_cast<std::size_t>(n)];
-          const double slack = t.g - o.g;
-          if (n == target_ || slack <= 0.0) continue;
-          if ((target_pos_ - o.pos).squaredNorm() < slack * slack) {
-            lower = true;
-            break;
-          }
-        }
-      }
-      if (!lower) {
-        ++edge_checks_;
-        const Vec2& u = nodes_[static_cast<std::size_t>(t.parent)].pos;
-        if (staticFree(u, t.pos) && !(use_dynamic && dynamic_.segmentBlocked(u, t.pos))) {
-          heapRemove(target_);
-          t.state = kClosed;
-          closed_.push_back(target_);
-          ++result.expansions;
-          done = true;
-        }
-      }
-    }
-    if (done) {
-      found_fast = true;
-    } else {
-      // Re-key the open list for the new start (the heuristic changed) and restore the heap.
-      for (const std::int32_t n : heap_) {
-        Node& node = nodes_[static_cast<std::size_t>(n)];
-        node.f = node.g + (target_pos_ - node.pos).norm();
-      }
-      for (std::size_t i = heap_.size() / 2; i-- > 0;) heapDown(i);
-      key_anchor_ = target_pos_;
-    }
+    found = reattachStart(start, use_dynamic, result);
   } else {
-    resetSearch(goal, use_dynamic);
-    target_ = addTargetNode(start);
-    Node& root = nodes_[0];
-    root.pos = goal;
-    root.g = 0.0;
-    root.f = (start - goal).norm();
-    key_anchor_ = start;
-    root.state = kOpen;
-    heapPush(0);
-    tree_valid_ = true;
-    tree_with_dynamic_ = use_dynamic;
-    tree_goal_ = goal;
+    plantTree(start, goal, use_dynamic);
   }
-
-  const std::size_t ns_poly = static_.polygonCount();
-  bool found = found_fast;
-  std::uint32_t until_check = 0;
-  while (!found && !heap_.empty()) {
-    if (until_check-- == 0) {
-      if (deadline.passed()) {
-        // The tree stays valid (closed nodes keep exact distances, the open list is intact;
-        // the start is re-attached by the next query), so a later query resumes here.
-        result.status = Status::kAborted;
-        result.edge_checks = edge_checks_;
-        result.discovered = total_discovered_;
-        return result;
-      }
-      until_check = 15;
-    }
-    const std::int32_t v = heapPop();
-    Node& node = nodes_[static_cast<std::size_t>(v)];
-    if (node.parent != kNone) {
-      // The lazy step: only now is the edge into v checked against the obstacles.
-      const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
-      ++edge_checks_;
-      std::size_t nb = oracle_ != nullptr && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
-      if (use_dynamic) {
-        const std::size_t nd =
-            dynamic_.segmentBlockers(u, node.pos, std::span<std::uint32_t>(blockers_).subspan(nb));
-        for (std::size_t i = nb; i < nb + nd; ++i) blockers_[i] += static_cast<std::uint32_t>(ns_poly);
-        nb += nd;
-      }
-      if (nb > 0) {
-        markEdgeBlocked(node.parent, v);
-        for (std::size_t i = 0; i < nb; ++i) discoverPolygon(blockers_[i], use_dynamic);
-        repairParent(v);
-        continue;
-      }
-    }
-    node.state = kClosed;
-    if (node.vertex != kNone && node.parent != kNone) {
-      const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
-      int side = orientSign(u, node.pos, node.prev, orient_bound_);
-      if (side == 0) side = orientSign(u, node.pos, node.next, orient_bound_);
-      node.turn = static_cast<std::int8_t>(side);
-    }
-    closed_.push_back(v);
-    ++result.expansions;
-    if (v == target_) {
-      found = true;
-      break;
-    }
-    expand(v);
-  }
+  result.status = found ? Status::kFound : search(use_dynamic, deadline, result);
   result.edge_checks = edge_checks_;
   result.discovered = total_discovered_;
-  if (!found) {
-    result.status = Status::kNoPath;
-    return result;
-  }
-
-  // Parents lead from the start to the goal: the path comes out in driving order.
-  if (result.start_moved) path_.push_back(start_in);
-  for (std::int32_t n = target_; n != kNone; n = nodes_[static_cast<std::size_t>(n)].parent) {
-    path_.push_back(nodes_[static_cast<std::size_t>(n)].pos);
-  }
-  if (result.goal_moved) path_.push_back(goal_in);
-  double length = 0.0;
-  for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
-  result.status = Status::kFound;
-  result.path = path_;
-  result.length = length;
+  if (result.status == Status::kFound) tracePath(start_in, goal_in, result);
   return result;
 }
 

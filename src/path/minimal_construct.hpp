@@ -133,6 +133,18 @@ class MinimalConstruct {
   void relax(std::int32_t from, std::int32_t to);
   void expand(std::int32_t v);
   void repairParent(std::int32_t node);
+  // query()'s steps: a kept tree takes the new start (true when the start is found at once,
+  // without a search), or a new tree is planted at the goal; the search pops until the start
+  // is closed, the heap is empty or the deadline passes; the path is traced from the start.
+  bool reattachStart(const Vec2& start, bool use_dynamic, Result& result);
+  bool startIsNextPop(bool use_dynamic, Result& result);
+  void plantTree(const Vec2& start, const Vec2& goal, bool use_dynamic);
+  Status search(bool use_dynamic, const Deadline& deadline, Result& result);
+  // The lazy edge check into a popped node; a blocked edge discovers its blockers and repairs
+  // the node's parent (false).
+  bool edgeIntoFree(std::int32_t v, bool use_dynamic);
+  void close(std::int32_t v);
+  void tracePath(const Vec2& start_in, const Vec2& goal_in, Result& result);
   bool edgeKnownBlocked(std::int32_t a, std::int32_t b) const;
   void markEdgeBlocked(std::int32_t a, std::int32_t b);
 

@@ -1,5 +1,5 @@
 #pragma once
-// Depth perception (ARCHITECTURE.md sections 2-3, the perception thread): one depth frame and
+// Depth perception (docs/ARCHITECTURE.md sections 2-3, the perception thread): one depth frame and
 // the robot's pose in the map become the moving (unmapped) obstacles D as convex polygons in
 // the map frame with velocities, the ObstacleFrame the control thread plans against.
 //
@@ -20,7 +20,7 @@
 //                       new track starts at 0 m/s. The turn rate is the smoothed rate at
 //                       which that velocity's direction turns (0 for slow tracks).
 //
-// Everything is sized at construction (the PerceptionWorkspace of STYLE.md is this object);
+// Everything is sized at construction (a workspace object, as OMPL and PX4 keep theirs);
 // process() allocates nothing, throws nothing and takes time linear in the sampled pixels and
 // the grid's cells.
 

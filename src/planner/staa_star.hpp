@@ -47,8 +47,8 @@ struct StaaConfig {
   // never popped, so far fewer heuristic queries are made. The lowest-h state an aborted
   // search returns is then chosen among the evaluated states only. Off: the paper's way.
   bool lazy_heuristic = false;
-  // Braking safety (ours; the paper has no such rule, and its agents collided with each other
-  // when both kept driving at full speed into a head-on meeting): a first action is allowed only
+  // Braking safety (ours; the paper has no such rule; docs/results.md says why we added it): a
+  // first action is allowed only
   // when the robot can brake to a stop after it without touching the map or the moving
   // obstacles predicted under the braking hypothesis (each keeps its velocity for
   // obstacle_reaction_s, then brakes at obstacle_brake_decel: what another robot, or a person,
@@ -58,23 +58,19 @@ struct StaaConfig {
   // A stricter tier of the same rule, preferred whenever some first action passes it: the
   // robot can brake to a stop after the action before any moving obstacle, kept at constant
   // velocity, reaches its path (passive safety: the robot does not drive into anything that
-  // keeps going). Without it two robots that each expect the other to brake kept their speed
-  // into a head-on meeting until no first action was safe any more (the 5-agent apartment
-  // runs of docs/results.md).
+  // keeps going), so two robots that each expect the other to brake do not both keep their
+  // speed (docs/results.md).
   bool passive_safety = true;
   // The passive tier grows each moving obstacle by this angle (rad) times the distance it has
-  // moved: its heading is known only roughly, it may turn (two agents turning towards each
-  // other were each predicted to pass the other until neither could stop: docs/results.md).
-  // A slow obstacle barely grows (a closing door at 0.4 m/s: 8 cm after a second). 0: the
-  // straight line. 0.2 fixed that contact at a cost of 2 goals in 101 on the 5-agent clutter
-  // runs; 0.3 cost 11 (seeds 1 and 2, 60 s).
+  // moved: its heading is known only roughly, it may turn. A slow obstacle barely grows (a
+  // closing door at 0.4 m/s: 8 cm after a second). 0: the straight line. The value's trade-off
+  // (contacts against goals) is measured in docs/results.md.
   double passive_heading_spread = 0.2;
   // Both braking checks also predict each obstacle that turns on its circle (its turn rate
   // comes through the perception seam: the simulation's agents have their w, depth
   // perception estimates one per track): braking along its circle in the first, keeping its
   // speed along it in the passive one; the stop must be clear of the straight and the
-  // circular prediction. The cooperative contacts on record were two agents turning into
-  // each other at 1.5-2 m/s, each predicted on a straight line (docs/results.md).
+  // circular prediction (docs/results.md: the contacts it removed).
   bool predict_turning = true;
   double obstacle_reaction_s = 0.3;
   double obstacle_brake_decel = 2.0;  // m/s^2

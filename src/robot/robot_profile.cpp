@@ -159,7 +159,7 @@ RobotProfile loadRobotProfile(const std::filesystem::path& path) {
 RobotProfile paperAgentProfile() {
   RobotProfile p;
   p.name = "paper-agent";
-  // PAPER-MAPS.md, "The agent", in the paper's (clockwise) order, stored counter-clockwise.
+  // docs/paper-worlds.md, "The agent", in the paper's (clockwise) order, stored counter-clockwise.
   p.footprint = {{0.4, 0.2}, {0.4, -0.2}, {-0.4, -0.25}, {-0.4, 0.25}};
   std::reverse(p.footprint.begin(), p.footprint.end());
   p.limits = MotionLimits{2.0, -1.0, 3.0, 2.0, 6.0};

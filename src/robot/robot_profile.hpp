@@ -1,5 +1,5 @@
 #pragma once
-// A robot profile (`staa-robot/1`, ARCHITECTURE.md section 6): footprint and limits.
+// A robot profile (`staa-robot/1`, docs/ARCHITECTURE.md section 6): footprint and limits.
 
 #include "geometry/types.hpp"
 
@@ -36,7 +36,7 @@ class ProfileError : public std::runtime_error {
 RobotProfile parseRobotProfile(const std::string& yaml_text, const std::string& source);
 RobotProfile loadRobotProfile(const std::filesystem::path& path);
 
-// The paper's simulated agent (PAPER-MAPS.md, "The agent"), also in config/robots/paper-agent.yaml.
+// The paper's simulated agent (docs/paper-worlds.md, "The agent"), also in config/robots/paper-agent.yaml.
 RobotProfile paperAgentProfile();
 
 }  // namespace staa

@@ -1,5 +1,5 @@
 #pragma once
-// A simulator scenario (`staa-scenario/1`, ARCHITECTURE.md section 6): one robot with a start
+// A simulator scenario (`staa-scenario/1`, docs/ARCHITECTURE.md section 6): one robot with a start
 // and a goal in a polygon map, among scripted moving obstacles ("movers") that walk their
 // waypoints back and forth at a constant speed, oblivious of the robot.
 

@@ -1,5 +1,5 @@
 #pragma once
-// A simulated depth camera (ARCHITECTURE.md section 4, `sim`): renders DepthFrames by ray
+// A simulated depth camera (docs/ARCHITECTURE.md section 4, `sim`): renders DepthFrames by ray
 // casting from the camera (robot pose + mount) into the polygon map, so perception runs on
 // real frames in tests and in the simulator. The world is vertical prisms: the map's
 // obstacles and its bounds from the floor to wall_height_m, movers to mover_height_m, and

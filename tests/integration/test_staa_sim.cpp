@@ -291,7 +291,7 @@ void writeOffice(const fs::path& dir) { savePolygonMap(generatePaperMap("office"
 const std::vector<std::string> kOfficeRun{"--map", "office.yaml", "--duration", "5", "--budget-expansions", "200",
                                           "--quiet"};
 
-// The contract's keys (ARCHITECTURE.md section 6), present in a multi-agent run too; the
+// The contract's keys (docs/ARCHITECTURE.md section 6), present in a multi-agent run too; the
 // single-robot ones are null there.
 void expectContractKeys(const Json& j) {
   for (const char* key : {"goals_reached", "collisions", "score"}) {

@@ -1,4 +1,4 @@
-// staa-map: map tools (ARCHITECTURE.md section 6). Import a ROS occupancy map, generate the
+// staa-map: map tools (docs/ARCHITECTURE.md section 6). Import a ROS occupancy map, generate the
 // paper's maps, place goal locations in a map without them, describe a map, plan a shortest
 // path, draw a map as SVG.
 // Exit status: 0 on a valid answer (including "no path"), 2 on bad input, with one line on

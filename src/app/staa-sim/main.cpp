@@ -1,4 +1,4 @@
-// staa-sim: the simulator (ARCHITECTURE.md section 6). Runs the real control cycle against a
+// staa-sim: the simulator (docs/ARCHITECTURE.md section 6). Runs the real control cycle against a
 // simulated world: one robot from a start to a goal in a polygon map (--map/--start/--goal), a
 // scenario among scripted movers (--scenario), several agents driving between random goals
 // of a map (--agents N > 1 or --mode ghost: the paper's Sec. IV-B, one run), or the whole
@@ -156,7 +156,7 @@ void checkStart(const staa::Scenario& sc, const std::string& where) {
   throw InputError(where + " " + fmtPose(sc.start) + ": the robot's footprint (" + sc.robot.name + ") " + what);
 }
 
-// A goal inside (or on) an obstacle or outside the bounds is rejected (ARCHITECTURE.md 2.1).
+// A goal inside (or on) an obstacle or outside the bounds is rejected (docs/ARCHITECTURE.md section 6).
 void checkGoal(const staa::Scenario& sc, const std::string& where) {
   const Vec2 g = sc.goal.position();
   const auto& b = sc.map.bounds;

@@ -1,4 +1,4 @@
-// staactl: the command-line client of staad's control socket (ARCHITECTURE.md section 6).
+// staactl: the command-line client of staad's control socket (docs/ARCHITECTURE.md section 6).
 //
 //   staactl [--socket PATH] goal X Y [TH] [--wait [--timeout S]] | stop | pose X Y [TH]
 //                           | status [--json] | wait [--timeout S] [--state STATE]

@@ -1,5 +1,5 @@
 #pragma once
-// Everything staad's threads pass to each other, in one place (ARCHITECTURE.md section 3):
+// Everything staad's threads pass to each other, in one place (docs/ARCHITECTURE.md section 3):
 // lock-free, allocation-free after construction, one writer and one reader each.
 //
 //   service    --requests-->   control   --poses-->     base        (SPSC rings)

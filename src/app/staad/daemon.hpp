@@ -1,7 +1,7 @@
 #pragma once
 // staad as a whole: wires the configuration, the HAL, the control task, the rings and
-// buffers, the control socket and the threads, in the start-up order of ARCHITECTURE.md
-// section 3:
+// buffers, the control socket and the threads, in the start-up order of docs/staad.md
+// ("Start-up order"):
 //
 //   1. config loaded and validated (a bad value: exit 2, the key and the value named);
 //   2. every workspace created: HAL (the base: sim or socketcan, whose bus is opened here,

@@ -1,6 +1,6 @@
 #pragma once
 // obstacles: depth: the perception thread's obstacle sensor over a depth camera
-// (ARCHITECTURE.md sections 3-4). Each read(now):
+// (docs/ARCHITECTURE.md sections 3-4). Each read(now):
 //   1. takes the robot's latest odometry (OdometrySlot, below);
 //   2. takes a new depth frame: camera.backend sim renders one (DepthRenderer) from the
 //      simulated world's latest movers and that pose; openni2 takes the Xtion's newest frame;

@@ -265,7 +265,7 @@ std::string requestLine(const Request& request) {
 
 namespace {
 
-// Each struct of the status in one place: the contract's keys (ARCHITECTURE.md section 6).
+// Each struct of the status in one place: the contract's keys (docs/ARCHITECTURE.md section 6).
 
 // p50 / p99 / max of a histogram, microseconds.
 Json timingJson(const rt::TimingSummary& t) { return {{"p50_us", t.p50_us}, {"p99_us", t.p99_us}, {"max_us", t.max_us}}; }

@@ -35,7 +35,7 @@ std::variant<Request, std::string> parseRequest(std::string_view line);
 
 std::string requestLine(const Request& request);  // the line staactl sends (with '\n')
 
-// The `status --json` object (ARCHITECTURE.md section 6): state, pose [x, y, theta],
+// The `status --json` object (docs/ARCHITECTURE.md section 6): state, pose [x, y, theta],
 // velocity [v, w], goal ([x, y, theta] or null), fault (null or a reason), cycle {p50_us,
 // p99_us, max_us, overruns, count}, rt_allocations, plus goal_id and queued_goal_id, wake-up
 // latency, staleness and the planner's last call.

@@ -2,7 +2,7 @@
 
 namespace staa::staad {
 
-// The spellings are part of the `staactl status --json` contract (ARCHITECTURE.md section 6):
+// The spellings are part of the `staactl status --json` contract (docs/ARCHITECTURE.md section 6):
 // scripts compare against them, so they never change with the enumerators' names.
 
 const char* toString(DaemonState state) {

@@ -1,5 +1,5 @@
 #pragma once
-// What staad reports (ARCHITECTURE.md section 6, `staactl status --json`, a contract) and
+// What staad reports (docs/ARCHITECTURE.md section 6, `staactl status --json`, a contract) and
 // the requests its control socket takes. Status is plain data: the control thread publishes
 // it through a triple buffer every cycle; the service thread turns it into JSON.
 

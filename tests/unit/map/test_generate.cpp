@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-// Facts asserted here are PAPER-MAPS.md's, restated from the document rather than from the
+// Facts asserted here are docs/paper-worlds.md's, restated from the document rather than from the
 // generator, so that a slip in either shows up as a failure.
 
 namespace staa {
@@ -69,7 +69,7 @@ struct Room {
   Door door;
 };
 
-// PAPER-MAPS.md's room lists, plus cell (0, 1) that we close as a room without a goal.
+// docs/paper-worlds.md's room lists, plus cell (0, 1) that we close as a room without a goal.
 std::vector<Room> officeRooms(bool with_closed_cell) {
   std::vector<Room> r;
   for (int i = 1; i <= 7; ++i) r.push_back({i, 0, Door::kTop});

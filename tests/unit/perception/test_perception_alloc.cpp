@@ -88,7 +88,7 @@ TEST(PerceptionAlloc, SimCameraRendersWithoutAllocatingAfterItsFirstFrame) {
   EXPECT_EQ(allocations, 0u);
 }
 
-// Perception's cost per 640 x 480 frame on this machine (ARCHITECTURE.md section 7 asks for
+// Perception's cost per 640 x 480 frame on this machine (docs/ARCHITECTURE.md section 7 asks for
 // p99 under 2 ms), printed for the default stride and for every pixel as the thread's CPU
 // time (a shared machine preempts the wall clock) and as wall time; the results of repeated
 // passes over the same frames are identical (the detector is deterministic).
