@@ -209,8 +209,8 @@ inline std::string given(const CLI::Option* option) {
 // ---- the command line of a tool ----
 
 // CLI11's App with the tools' failure line: "TOOL: MESSAGE" on stderr, exit status 2. The
-// checks above say what they expected; options that exclude each other are named with their
-// values and why; CLI11's other errors (unknown option, missing value) point to --help.
+// checks above say what they expected; options that exclude or need each other are named with
+// their values and why; CLI11's other errors (unknown option, missing value) point to --help.
 class CommandLine {
  public:
   CommandLine(std::string tool, const std::string& description) : app(description, tool), tool_(std::move(tool)) {
@@ -219,10 +219,16 @@ class CommandLine {
   CommandLine(const CommandLine&) = delete;
   CommandLine& operator=(const CommandLine&) = delete;
 
-  // CLI11's excludes, both ways.
+  // CLI11's excludes, both ways: "--a 1 and --b 2 exclude each other: WHY".
   void exclude(CLI::Option* a, CLI::Option* b, std::string why) {
     a->excludes(b);
-    exclusions_.push_back({a, b, std::move(why)});
+    pairs_.push_back({a, b, " excludes ", std::move(why)});
+  }
+
+  // CLI11's needs, one way: "--a 1 needs --b: WHY".
+  void need(CLI::Option* a, CLI::Option* b, std::string why) {
+    a->needs(b);
+    pairs_.push_back({a, b, " requires ", std::move(why)});
   }
 
   // nullopt: go on; otherwise the exit status, after the help (0) or the failure line (2).
@@ -238,28 +244,36 @@ class CommandLine {
   CLI::App app;
 
  private:
-  struct Exclusion {
+  // Two options CLI11 relates; `verb` is the word of its message ("--a excludes --b").
+  struct Pair {
     const CLI::Option* a;
     const CLI::Option* b;
+    std::string verb;
     std::string why;
   };
+
+  // The pair's own message, with the values given, in the order the pair was declared.
+  static std::optional<std::string> pairMessage(const Pair& p, const std::string& what) {
+    const std::string a = p.a->get_name(), b = p.b->get_name();
+    if (p.verb == " excludes ") {
+      if (what != a + p.verb + b && what != b + p.verb + a) return std::nullopt;
+      return a + " " + given(p.a) + " and " + b + " " + given(p.b) + " exclude each other: " + p.why;
+    }
+    if (what != a + p.verb + b) return std::nullopt;
+    return a + " " + given(p.a) + " needs " + b + ": " + p.why;
+  }
 
   std::string message(const CLI::Error& e) const {
     const std::string what = e.what();
     if (dynamic_cast<const CLI::ValidationError*>(&e) != nullptr) return tool_ + ": " + what + "\n";
-    for (const Exclusion& x : exclusions_) {
-      for (const auto& [first, second] : {std::pair{x.a, x.b}, std::pair{x.b, x.a}}) {
-        if (what == first->get_name() + " excludes " + second->get_name()) {
-          return tool_ + ": " + first->get_name() + " " + given(first) + " and " + second->get_name() + " " +
-                 given(second) + " exclude each other: " + x.why + "\n";
-        }
-      }
+    for (const Pair& p : pairs_) {
+      if (const auto text = pairMessage(p, what)) return tool_ + ": " + *text + "\n";
     }
     return tool_ + ": " + what + " (see " + tool_ + " --help)\n";
   }
 
   std::string tool_;
-  std::vector<Exclusion> exclusions_;
+  std::vector<Pair> pairs_;
 };
 
 // ---- the budget ----

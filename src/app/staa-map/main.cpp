@@ -439,9 +439,9 @@ CLI::App* addPath(CLI::App& app, PathArgs& a) {
   return path;
 }
 
-CLI::App* addSvg(CLI::App& app, SvgArgs& a) {
+CLI::App* addSvg(staa::cli::CommandLine& cl, SvgArgs& a) {
   namespace cli = staa::cli;
-  auto* svg = app.add_subcommand("svg", "Draw a map as SVG: obstacles, inflated obstacles, goals, and with "
+  auto* svg = cl.app.add_subcommand("svg", "Draw a map as SVG: obstacles, inflated obstacles, goals, and with "
                                         "--from/--to the shortest path.");
   svg->add_option("MAP", a.map_file, "Polygon map")->required();
   svg->add_option("-o,--output", a.out_file, "SVG file to write")->required();
@@ -451,8 +451,8 @@ CLI::App* addSvg(CLI::App& app, SvgArgs& a) {
   auto* to = svg->add_option("--to", a.to_text, "Goal X,Y of a path to draw")
                  ->check(cli::point<2>(kPointForm))
                  ->type_name("X,Y");
-  from->needs(to);
-  to->needs(from);
+  cl.need(from, to, "a path needs both --from and --to");
+  cl.need(to, from, "a path needs both --from and --to");
   svg->add_option("--inflate", a.options.inflation_radius_m,
                   "Inflation radius in metres (0: do not draw inflated obstacles)")
       ->transform(cli::nonNegative("a radius in metres"))
@@ -488,7 +488,7 @@ int run(int argc, char** argv) {
   const CLI::App* generate_cmd = addGenerate(cl.app, generate);
   const CLI::App* goals_cmd = addGoals(cl.app, goals);
   const CLI::App* path_cmd = addPath(cl.app, path);
-  const CLI::App* svg_cmd = addSvg(cl.app, svg);
+  const CLI::App* svg_cmd = addSvg(cl, svg);
   rejectUnknownSubcommand(cl.app, argc, argv);
   if (const auto exit = cl.parse(argc, argv)) return *exit;
 
