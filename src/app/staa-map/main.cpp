@@ -100,51 +100,69 @@ std::string boxText(const Box& b) {
          "] (" + fmt(b.width(), 2) + " x " + fmt(b.height(), 2) + " m)";
 }
 
-int runInfo(const std::string& map_file, bool json) {
-  const PolygonMap map = staa::loadPolygonMap(map_file);
-  std::size_t vertices = 0, convex = 0;
+// What `info` says of a map's obstacles.
+struct ObstacleStats {
+  std::size_t vertices = 0;
+  std::size_t convex = 0;
+  std::size_t non_convex = 0;
   std::optional<Box> extent;
+  double area = 0.0;  // the area the obstacles cover, overlaps counted once
+};
+
+ObstacleStats obstacleStats(const PolygonMap& map) {
+  ObstacleStats st;
   for (const auto& poly : map.obstacles) {
-    vertices += poly.size();
-    if (staa::isConvex(poly)) ++convex;
+    st.vertices += poly.size();
+    if (staa::isConvex(poly)) ++st.convex;
     const Box b = staa::boundingBox(poly);
-    if (!extent) {
-      extent = b;
+    if (!st.extent) {
+      st.extent = b;
     } else {
-      extent->min = extent->min.cwiseMin(b.min);
-      extent->max = extent->max.cwiseMax(b.max);
+      st.extent->min = st.extent->min.cwiseMin(b.min);
+      st.extent->max = st.extent->max.cwiseMax(b.max);
     }
   }
-  // The area the obstacles cover, overlaps counted once.
-  double area = 0.0;
   for (const auto& region : staa::unitePolygons(map.obstacles)) {
-    area += std::abs(staa::signedArea(region.outer));
-    for (const auto& hole : region.holes) area -= std::abs(staa::signedArea(hole));
+    st.area += std::abs(staa::signedArea(region.outer));
+    for (const auto& hole : region.holes) st.area -= std::abs(staa::signedArea(hole));
   }
-  const std::size_t non_convex = map.obstacles.size() - convex;
+  st.non_convex = map.obstacles.size() - st.convex;
+  return st;
+}
 
-  if (json) {
-    Json j;
-    j["file"] = map_file;
-    j["name"] = map.name;
-    j["bounds"] = map.bounds ? boxJson(*map.bounds) : Json(nullptr);
-    j["polygons"] = map.obstacles.size();
-    j["vertices"] = vertices;
-    j["convex"] = convex;
-    j["non_convex"] = non_convex;
-    j["extent"] = extent ? boxJson(*extent) : Json(nullptr);
-    j["goals"] = map.goals.size();
-    j["obstacle_area_m2"] = std::round(area * 1e4) / 1e4;
-    printJson(j);
-    return 0;
-  }
+Json infoJson(const std::string& map_file, const PolygonMap& map, const ObstacleStats& st) {
+  Json j;
+  j["file"] = map_file;
+  j["name"] = map.name;
+  j["bounds"] = map.bounds ? boxJson(*map.bounds) : Json(nullptr);
+  j["polygons"] = map.obstacles.size();
+  j["vertices"] = st.vertices;
+  j["convex"] = st.convex;
+  j["non_convex"] = st.non_convex;
+  j["extent"] = st.extent ? boxJson(*st.extent) : Json(nullptr);
+  j["goals"] = map.goals.size();
+  j["obstacle_area_m2"] = std::round(st.area * 1e4) / 1e4;
+  return j;
+}
+
+void printInfo(const std::string& map_file, const PolygonMap& map, const ObstacleStats& st) {
   std::cout << "map:       " << map.name << "  (" << map_file << ")\n"
             << "bounds:    " << (map.bounds ? boxText(*map.bounds) : std::string("none (unbounded)")) << '\n'
-            << "polygons:  " << map.obstacles.size() << " (" << convex << " convex, " << non_convex
-            << " non-convex), " << vertices << " vertices\n"
-            << "extent:    " << (extent ? boxText(*extent) : std::string("none (no obstacles)")) << '\n'
+            << "polygons:  " << map.obstacles.size() << " (" << st.convex << " convex, " << st.non_convex
+            << " non-convex), " << st.vertices << " vertices\n"
+            << "extent:    " << (st.extent ? boxText(*st.extent) : std::string("none (no obstacles)")) << '\n'
             << "goals:     " << map.goals.size() << '\n'
-            << "obstacles: " << fmt(area, 2) << " m^2 (union)\n";
+            << "obstacles: " << fmt(st.area, 2) << " m^2 (union)\n";
+}
+
+int runInfo(const std::string& map_file, bool json) {
+  const PolygonMap map = staa::loadPolygonMap(map_file);
+  const ObstacleStats st = obstacleStats(map);
+  if (json) {
+    printJson(infoJson(map_file, map, st));
+  } else {
+    printInfo(map_file, map, st);
+  }
   return 0;
 }
 

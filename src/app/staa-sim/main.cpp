@@ -215,38 +215,46 @@ void makeSvgDir(const fs::path& dir) {
   }
 }
 
+void announce(const Request& rq) {
+  const auto& o = rq.options;
+  std::cerr << "staa-sim: " << rq.scenario.name << ": " << fmtPose(rq.scenario.start) << " -> "
+            << fmtPose(rq.scenario.goal) << ", " << rq.scenario.movers.size()
+            << (rq.scenario.movers.size() == 1 ? " mover, " : " movers, ") << staa::toString(rq.controller) << " ("
+            << staa::toString(rq.heuristic) << ", " << o.budget.describe() << " per cycle), " << fmt(o.duration_s, 1)
+            << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
+}
+
+// One line per simulated second; the callback runs outside the timed cycle.
+void reportEverySecond(staa::SimOptions& o) {
+  const double rate = o.rate_hz;
+  o.on_cycle = [rate, last = 0L](const staa::World& world, const staa::CycleOutput& out, int cycle) mutable {
+    const long second = static_cast<long>(std::floor(static_cast<double>(cycle) / rate + 1e-9));
+    if (second <= last) return;
+    last = second;
+    const staa::RobotState& rs = world.robot();
+    std::fprintf(stderr, "t=%.1fs pos=(%.2f,%.2f) v=%.2f state=%s\n", world.time(), rs.pose.x, rs.pose.y, rs.v,
+                 staa::toString(out.state));
+  };
+}
+
+// The paper's baselines run in the same cycle in place of STAA* (null: STAA*).
+std::unique_ptr<staa::LocalController> baselineController(const Request& rq) {
+  if (rq.controller == staa::ControllerKind::kPd) return std::make_unique<staa::PdController>(rq.scenario.robot);
+  if (rq.controller == staa::ControllerKind::kDwa) {
+    return std::make_unique<staa::DwaController>(rq.scenario.robot, rq.options.control.local);
+  }
+  return nullptr;
+}
+
 int simulate(Request& rq) {
   std::ofstream json_out;
   openJsonOutput(rq.json_file, json_out);
   makeSvgDir(rq.options.svg_dir);
-
   if (!rq.quiet) {
-    const auto& o = rq.options;
-    std::cerr << "staa-sim: " << rq.scenario.name << ": " << fmtPose(rq.scenario.start) << " -> "
-              << fmtPose(rq.scenario.goal) << ", " << rq.scenario.movers.size()
-              << (rq.scenario.movers.size() == 1 ? " mover, " : " movers, ") << staa::toString(rq.controller)
-              << " (" << staa::toString(rq.heuristic) << ", "
-              << o.budget.describe()
-              << " per cycle), " << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
-    // One line per simulated second; the callback runs outside the timed cycle.
-    const double rate = o.rate_hz;
-    rq.options.on_cycle = [rate, last = 0L](const staa::World& world, const staa::CycleOutput& out,
-                                            int cycle) mutable {
-      const long second = static_cast<long>(std::floor(static_cast<double>(cycle) / rate + 1e-9));
-      if (second <= last) return;
-      last = second;
-      const staa::RobotState& rs = world.robot();
-      std::fprintf(stderr, "t=%.1fs pos=(%.2f,%.2f) v=%.2f state=%s\n", world.time(), rs.pose.x, rs.pose.y, rs.v,
-                   staa::toString(out.state));
-    };
+    announce(rq);
+    reportEverySecond(rq.options);
   }
-
-  // The paper's baselines run in the same cycle in place of STAA* (owned here, for the run).
-  std::unique_ptr<staa::LocalController> baseline;
-  if (rq.controller == staa::ControllerKind::kPd) baseline = std::make_unique<staa::PdController>(rq.scenario.robot);
-  if (rq.controller == staa::ControllerKind::kDwa) {
-    baseline = std::make_unique<staa::DwaController>(rq.scenario.robot, rq.options.control.local);
-  }
+  const std::unique_ptr<staa::LocalController> baseline = baselineController(rq);  // owned here, for the run
   rq.options.controller = baseline.get();
 
   staa::SimResult result;
@@ -470,68 +478,105 @@ std::string multiSummary(const MultiRequest& rq, const staa::MultiSimResult& r, 
   return s.str();
 }
 
+void announceMulti(const MultiRequest& rq) {
+  const auto& o = rq.options;
+  std::cerr << "staa-sim: " << rq.map.name << ": " << o.agents << (o.agents == 1 ? " agent, " : " agents, ")
+            << staa::toString(o.mode) << ", " << staa::toString(o.controller) << " (" << staa::toString(rq.heuristic)
+            << ", " << o.budget.describe() << " per cycle), " << rq.map.goals.size() << " goal locations, seed "
+            << o.seed << ", " << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
+}
+
+// Per step of a multi-agent run, outside the simulated cycle: clearance, progress (a goal
+// reached shows as a new current goal), trails, frames and a line per simulated second.
+class MultiStepWatcher {
+ public:
+  explicit MultiStepWatcher(const MultiRequest& rq)
+      : rq_(rq),
+        clearance_(rq.map),
+        reached_(static_cast<std::size_t>(rq.options.agents), 0),
+        trails_(rq.svg_dir.empty() ? 0 : static_cast<std::size_t>(rq.options.agents)),
+        trail_points_(static_cast<std::size_t>(std::ceil(kTrailSeconds * rq.options.rate_hz)) + 1) {}
+
+  void step(const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle) {
+    clearance_.update(world, rq_);
+    const Score score = countGoals(world, goals);
+    extendTrails(world);
+    if (!rq_.svg_dir.empty() && cycle % rq_.svg_every == 0) writeFrame(world, goals, cycle, score);
+    const long second = static_cast<long>(std::floor(world.time() + 1e-9));
+    if (!rq_.quiet && second > last_second_) {
+      last_second_ = second;
+      std::fprintf(stderr, "t=%.1fs goals=%d collisions=%d agent0=(%.2f,%.2f)\n", world.time(), score.goals,
+                   score.collisions, world.agent(0).pose.x, world.agent(0).pose.y);
+    }
+  }
+
+  double clearance() const { return clearance_.value(); }
+  int frames() const { return frames_; }
+
+ private:
+  struct Score {
+    int goals = 0;
+    int collisions = 0;
+  };
+
+  // The counted agents' goals reached so far and collision episodes.
+  Score countGoals(const staa::MultiWorld& world, std::span<const Vec2> goals) {
+    if (last_goals_.empty()) last_goals_.assign(goals.begin(), goals.end());
+    Score score;
+    for (std::size_t i = 0; i < goals.size(); ++i) {
+      if (goals[i] != last_goals_[i]) ++reached_[i];
+      last_goals_[i] = goals[i];
+      if (counted(rq_, i)) {
+        score.goals += reached_[i];
+        score.collisions += world.collisionEpisodes(i);
+      }
+    }
+    return score;
+  }
+
+  void extendTrails(const staa::MultiWorld& world) {
+    for (std::size_t i = 0; i < trails_.size(); ++i) {
+      trails_[i].push_back(world.agent(i).pose.position());
+      if (trails_[i].size() > trail_points_) trails_[i].pop_front();
+    }
+  }
+
+  void writeFrame(const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle, const Score& score) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.svg", cycle);
+    writeMultiFrame(rq_.svg_dir / name, rq_, world, goals, trails_, score.goals, score.collisions);
+    ++frames_;
+  }
+
+  const MultiRequest& rq_;
+  ClearanceTracker clearance_;
+  std::vector<Vec2> last_goals_;
+  std::vector<int> reached_;
+  std::vector<std::deque<Vec2>> trails_;
+  std::size_t trail_points_;
+  int frames_ = 0;
+  long last_second_ = 0;
+};
+
 int simulateMulti(MultiRequest& rq) {
   std::ofstream json_out;
   openJsonOutput(rq.json_file, json_out);
   makeSvgDir(rq.svg_dir);
+  if (!rq.quiet) announceMulti(rq);
 
-  auto& o = rq.options;
-  if (!rq.quiet) {
-    std::cerr << "staa-sim: " << rq.map.name << ": " << o.agents << (o.agents == 1 ? " agent, " : " agents, ")
-              << staa::toString(o.mode) << ", " << staa::toString(o.controller) << " (" << staa::toString(rq.heuristic) << ", "
-              << o.budget.describe()
-              << " per cycle), " << rq.map.goals.size() << " goal locations, seed " << o.seed << ", "
-              << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
-  }
-
-  // Per step, outside the simulated cycle: clearance, progress (a goal reached shows as a new
-  // current goal), trails and frames.
-  ClearanceTracker clearance(rq.map);
-  std::vector<Vec2> last_goals;
-  std::vector<int> reached(static_cast<std::size_t>(o.agents), 0);
-  std::vector<std::deque<Vec2>> trails(rq.svg_dir.empty() ? 0 : static_cast<std::size_t>(o.agents));
-  const auto trail_points = static_cast<std::size_t>(std::ceil(kTrailSeconds * o.rate_hz)) + 1;
-  int frames = 0;
-  long last_second = 0;
-  o.on_step_goals = [&](const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle) {
-    clearance.update(world, rq);
-    if (last_goals.empty()) last_goals.assign(goals.begin(), goals.end());
-    int goals_now = 0, collisions_now = 0;
-    for (std::size_t i = 0; i < goals.size(); ++i) {
-      if (goals[i] != last_goals[i]) ++reached[i];
-      last_goals[i] = goals[i];
-      if (counted(rq, i)) {
-        goals_now += reached[i];
-        collisions_now += world.collisionEpisodes(i);
-      }
-    }
-    for (std::size_t i = 0; i < trails.size(); ++i) {
-      trails[i].push_back(world.agent(i).pose.position());
-      if (trails[i].size() > trail_points) trails[i].pop_front();
-    }
-    if (!rq.svg_dir.empty() && cycle % rq.svg_every == 0) {
-      char name[32];
-      std::snprintf(name, sizeof name, "frame_%05d.svg", cycle);
-      writeMultiFrame(rq.svg_dir / name, rq, world, goals, trails, goals_now, collisions_now);
-      ++frames;
-    }
-    const long second = static_cast<long>(std::floor(world.time() + 1e-9));
-    if (!rq.quiet && second > last_second) {
-      last_second = second;
-      std::fprintf(stderr, "t=%.1fs goals=%d collisions=%d agent0=(%.2f,%.2f)\n", world.time(), goals_now,
-                   collisions_now, world.agent(0).pose.x, world.agent(0).pose.y);
-    }
+  MultiStepWatcher watcher(rq);
+  rq.options.on_step_goals = [&watcher](const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle) {
+    watcher.step(world, goals, cycle);
   };
-
   staa::MultiSimResult result;
   try {
-    result = staa::runMultiAgent(rq.map, rq.robot, o);
+    result = staa::runMultiAgent(rq.map, rq.robot, rq.options);
   } catch (const std::exception& e) {
     std::cerr << "staa-sim: the run failed: " << e.what() << '\n';
     return kExitRunFailed;
   }
-  writeJsonOutput(rq.json_file, json_out, multiResultJson(rq, result, clearance.value(), frames));
-  std::cout << multiSummary(rq, result, clearance.value(), frames) << '\n';
+  writeJsonOutput(rq.json_file, json_out, multiResultJson(rq, result, watcher.clearance(), watcher.frames()));
+  std::cout << multiSummary(rq, result, watcher.clearance(), watcher.frames()) << '\n';
   return 0;
 }
 
