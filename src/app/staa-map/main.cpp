@@ -20,17 +20,16 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace {
@@ -41,58 +40,8 @@ using staa::Vec2;
 using Json = nlohmann::ordered_json;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kExitBadInput = 2;
-
 using staa::cli::InputError;
-
-// ---- parsing of values (std::from_chars: no locale, no trailing garbage) ----
-
-using staa::cli::parseDouble;
-
-Vec2 parseXY(const std::string& option, const std::string& text) {
-  const auto comma = text.find(',');
-  if (comma != std::string::npos) {
-    const auto x = parseDouble(std::string_view(text).substr(0, comma));
-    const auto y = parseDouble(std::string_view(text).substr(comma + 1));
-    if (x && y) return {*x, *y};
-  }
-  throw InputError(option + ": expected X,Y (two finite numbers in metres), got '" + text + "'");
-}
-
-double parseNonNegative(const std::string& option, const std::string& text, std::string_view what) {
-  const auto v = parseDouble(text);
-  if (!v || *v < 0.0) {
-    throw InputError(option + ": expected " + std::string(what) + " (a finite number >= 0), got '" + text + "'");
-  }
-  return *v;
-}
-
-double parsePositive(const std::string& option, const std::string& text, std::string_view what) {
-  const auto v = parseDouble(text);
-  if (!v || *v <= 0.0) {
-    throw InputError(option + ": expected " + std::string(what) + " (a finite number > 0), got '" + text + "'");
-  }
-  return *v;
-}
-
-int parseCount(const std::string& option, const std::string& text, int min, int max, std::string_view what) {
-  const auto v = staa::cli::parseUnsigned(text);
-  if (!v || *v < static_cast<std::uint64_t>(min) || *v > static_cast<std::uint64_t>(max)) {
-    throw InputError(option + ": expected " + std::string(what) + " (an integer from " + std::to_string(min) + " to " +
-                     std::to_string(max) + "), got '" + text + "'");
-  }
-  return static_cast<int>(*v);
-}
-
-std::uint64_t parseSeed(const std::string& option, const std::string& text) {
-  std::uint64_t v = 0;
-  const char* end = text.data() + text.size();
-  auto [ptr, ec] = std::from_chars(text.data(), end, v);
-  if (ec != std::errc{} || ptr != end || text.empty()) {
-    throw InputError(option + ": expected a non-negative integer, got '" + text + "'");
-  }
-  return v;
-}
+using staa::cli::kExitBadInput;
 
 // ---- output helpers ----
 
@@ -151,51 +100,69 @@ std::string boxText(const Box& b) {
          "] (" + fmt(b.width(), 2) + " x " + fmt(b.height(), 2) + " m)";
 }
 
-int runInfo(const std::string& map_file, bool json) {
-  const PolygonMap map = staa::loadPolygonMap(map_file);
-  std::size_t vertices = 0, convex = 0;
+// What `info` says of a map's obstacles.
+struct ObstacleStats {
+  std::size_t vertices = 0;
+  std::size_t convex = 0;
+  std::size_t non_convex = 0;
   std::optional<Box> extent;
+  double area = 0.0;  // the area the obstacles cover, overlaps counted once
+};
+
+ObstacleStats obstacleStats(const PolygonMap& map) {
+  ObstacleStats st;
   for (const auto& poly : map.obstacles) {
-    vertices += poly.size();
-    if (staa::isConvex(poly)) ++convex;
+    st.vertices += poly.size();
+    if (staa::isConvex(poly)) ++st.convex;
     const Box b = staa::boundingBox(poly);
-    if (!extent) {
-      extent = b;
+    if (!st.extent) {
+      st.extent = b;
     } else {
-      extent->min = extent->min.cwiseMin(b.min);
-      extent->max = extent->max.cwiseMax(b.max);
+      st.extent->min = st.extent->min.cwiseMin(b.min);
+      st.extent->max = st.extent->max.cwiseMax(b.max);
     }
   }
-  // The area the obstacles cover, overlaps counted once.
-  double area = 0.0;
   for (const auto& region : staa::unitePolygons(map.obstacles)) {
-    area += std::abs(staa::signedArea(region.outer));
-    for (const auto& hole : region.holes) area -= std::abs(staa::signedArea(hole));
+    st.area += std::abs(staa::signedArea(region.outer));
+    for (const auto& hole : region.holes) st.area -= std::abs(staa::signedArea(hole));
   }
-  const std::size_t non_convex = map.obstacles.size() - convex;
+  st.non_convex = map.obstacles.size() - st.convex;
+  return st;
+}
 
-  if (json) {
-    Json j;
-    j["file"] = map_file;
-    j["name"] = map.name;
-    j["bounds"] = map.bounds ? boxJson(*map.bounds) : Json(nullptr);
-    j["polygons"] = map.obstacles.size();
-    j["vertices"] = vertices;
-    j["convex"] = convex;
-    j["non_convex"] = non_convex;
-    j["extent"] = extent ? boxJson(*extent) : Json(nullptr);
-    j["goals"] = map.goals.size();
-    j["obstacle_area_m2"] = std::round(area * 1e4) / 1e4;
-    printJson(j);
-    return 0;
-  }
+Json infoJson(const std::string& map_file, const PolygonMap& map, const ObstacleStats& st) {
+  Json j;
+  j["file"] = map_file;
+  j["name"] = map.name;
+  j["bounds"] = map.bounds ? boxJson(*map.bounds) : Json(nullptr);
+  j["polygons"] = map.obstacles.size();
+  j["vertices"] = st.vertices;
+  j["convex"] = st.convex;
+  j["non_convex"] = st.non_convex;
+  j["extent"] = st.extent ? boxJson(*st.extent) : Json(nullptr);
+  j["goals"] = map.goals.size();
+  j["obstacle_area_m2"] = std::round(st.area * 1e4) / 1e4;
+  return j;
+}
+
+void printInfo(const std::string& map_file, const PolygonMap& map, const ObstacleStats& st) {
   std::cout << "map:       " << map.name << "  (" << map_file << ")\n"
             << "bounds:    " << (map.bounds ? boxText(*map.bounds) : std::string("none (unbounded)")) << '\n'
-            << "polygons:  " << map.obstacles.size() << " (" << convex << " convex, " << non_convex
-            << " non-convex), " << vertices << " vertices\n"
-            << "extent:    " << (extent ? boxText(*extent) : std::string("none (no obstacles)")) << '\n'
+            << "polygons:  " << map.obstacles.size() << " (" << st.convex << " convex, " << st.non_convex
+            << " non-convex), " << st.vertices << " vertices\n"
+            << "extent:    " << (st.extent ? boxText(*st.extent) : std::string("none (no obstacles)")) << '\n'
             << "goals:     " << map.goals.size() << '\n'
-            << "obstacles: " << fmt(area, 2) << " m^2 (union)\n";
+            << "obstacles: " << fmt(st.area, 2) << " m^2 (union)\n";
+}
+
+int runInfo(const std::string& map_file, bool json) {
+  const PolygonMap map = staa::loadPolygonMap(map_file);
+  const ObstacleStats st = obstacleStats(map);
+  if (json) {
+    printJson(infoJson(map_file, map, st));
+  } else {
+    printInfo(map_file, map, st);
+  }
   return 0;
 }
 
@@ -223,40 +190,35 @@ std::string placedText(const PolygonMap& map, const staa::GoalPlacement& placeme
   return s;
 }
 
-int runImport(const std::string& ros_yaml, const std::string& out_file, const std::string& simplify_text,
-              const std::string& goals_text, const std::string& clearance_text) {
+struct ImportArgs {
+  std::string ros_map, out_file;
   staa::ImportOptions options;
-  options.simplify_m = parseNonNegative("--simplify", simplify_text, "a tolerance in metres");
-  staa::GoalPlacement placement;
-  placement.count = parseCount("--goals", goals_text, 0, 100000, "a number of goals to place");
-  if (!clearance_text.empty()) {
-    placement.clearance_m = parseNonNegative("--goal-clearance", clearance_text, "a clearance in metres");
-    if (placement.count == 0) {
-      throw InputError("--goal-clearance " + clearance_text + " places nothing without --goals N (N > 0)");
-    }
+  staa::GoalPlacement placement{.count = 0};
+  const CLI::Option* clearance_option = nullptr;
+};
+
+int runImport(ImportArgs& a) {
+  staa::GoalPlacement& placement = a.placement;
+  if (a.clearance_option->count() > 0 && placement.count == 0) {
+    throw InputError("--goal-clearance " + staa::cli::given(a.clearance_option) +
+                     " places nothing without --goals N (N > 0)");
   }
-  std::cout << "importing " << ros_yaml << " (simplify " << fmt(options.simplify_m, 3) << " m) ..." << std::endl;
+  std::cout << "importing " << a.ros_map << " (simplify " << fmt(a.options.simplify_m, 3) << " m) ..." << std::endl;
   const auto t0 = Clock::now();
-  PolygonMap map = staa::importRosMap(ros_yaml, options);
+  PolygonMap map = staa::importRosMap(a.ros_map, a.options);
   const double ms = microsecondsSince(t0) / 1000.0;
-  if (placement.count > 0) placeGoalsInto(map, ros_yaml, placement);
-  staa::savePolygonMap(map, out_file);
+  if (placement.count > 0) placeGoalsInto(map, a.ros_map, placement);
+  staa::savePolygonMap(map, a.out_file);
   std::size_t vertices = 0;
   for (const auto& p : map.obstacles) vertices += p.size();
   std::cout << "imported " << map.name << ": " << map.obstacles.size() << " polygons, " << vertices
             << " vertices in " << fmt(ms, 1) << " ms";
   if (placement.count > 0) std::cout << "; " << placedText(map, placement);
-  std::cout << " -> " << out_file << '\n';
+  std::cout << " -> " << a.out_file << '\n';
   return 0;
 }
 
-int runGoals(const std::string& map_file, const std::string& out_file, const std::string& count_text,
-             const std::string& clearance_text, const std::string& spacing_text, const std::string& seed_text) {
-  staa::GoalPlacement placement;
-  placement.count = parseCount("--count", count_text, 1, 100000, "a number of goals");
-  placement.clearance_m = parseNonNegative("--clearance", clearance_text, "a clearance in metres");
-  placement.min_spacing_m = parsePositive("--spacing", spacing_text, "a distance in metres");
-  placement.seed = parseSeed("--seed", seed_text);
+int runGoals(const std::string& map_file, const std::string& out_file, const staa::GoalPlacement& placement) {
   PolygonMap map = staa::loadPolygonMap(map_file);
   const std::size_t replaced = map.goals.size();
   placeGoalsInto(map, map_file, placement);
@@ -267,8 +229,7 @@ int runGoals(const std::string& map_file, const std::string& out_file, const std
   return 0;
 }
 
-int runGenerate(const std::string& name, const std::string& seed_text, const std::string& out_file) {
-  const std::uint64_t seed = parseSeed("--seed", seed_text);
+int runGenerate(const std::string& name, std::uint64_t seed, const std::string& out_file) {
   const PolygonMap map = staa::generatePaperMap(name, seed);
   staa::savePolygonMap(map, out_file);
   std::size_t vertices = 0;
@@ -280,10 +241,9 @@ int runGenerate(const std::string& name, const std::string& seed_text, const std
 
 // ---- path ----
 
-staa::GlobalPathOptions pathOptions(const std::string& inflate_text) {
-  staa::GlobalPathOptions options;
-  options.inflation_radius_m = parseNonNegative("--inflate", inflate_text, "a radius in metres");
-  return options;
+Vec2 point(const std::string& checked_text) {
+  const auto p = staa::cli::parsePoint<2>(checked_text).value();
+  return {p[0], p[1]};
 }
 
 // Says on stderr why an answer is "no path" when the cause lies in the request itself.
@@ -295,11 +255,8 @@ void explainEndpoint(staa::PathStatus status, const Vec2& from, const Vec2& to) 
   }
 }
 
-int runPath(const std::string& map_file, const std::string& from_text, const std::string& to_text,
-            const std::string& inflate_text, bool json) {
-  const Vec2 from = parseXY("--from", from_text);
-  const Vec2 to = parseXY("--to", to_text);
-  const staa::GlobalPathOptions options = pathOptions(inflate_text);
+int runPath(const std::string& map_file, const Vec2& from, const Vec2& to, const staa::GlobalPathOptions& options,
+            bool json) {
   const PolygonMap map = staa::loadPolygonMap(map_file);
 
   // Building M' is load-time work; time_us is the query alone.
@@ -345,22 +302,23 @@ int runPath(const std::string& map_file, const std::string& from_text, const std
 
 // ---- svg ----
 
-int runSvg(const std::string& map_file, const std::string& out_file, const std::string& from_text,
-           const std::string& to_text, const std::string& inflate_text, const std::string& scale_text) {
-  if (from_text.empty() != to_text.empty()) {
-    throw InputError(std::string(from_text.empty() ? "--to" : "--from") + ": a path needs both --from and --to");
-  }
-  const bool with_path = !from_text.empty();
-  const Vec2 from = with_path ? parseXY("--from", from_text) : Vec2::Zero();
-  const Vec2 to = with_path ? parseXY("--to", to_text) : Vec2::Zero();
-  const staa::GlobalPathOptions options = pathOptions(inflate_text);
-  std::optional<double> scale;
-  if (!scale_text.empty()) scale = parsePositive("--scale", scale_text, "pixels per metre");
-  const PolygonMap map = staa::loadPolygonMap(map_file);
+struct SvgArgs {
+  std::string map_file, out_file, from_text, to_text;
+  staa::GlobalPathOptions options;
+  double scale = 0.0;
+  const CLI::Option* scale_option = nullptr;
+};
+
+int runSvg(const SvgArgs& a) {
+  const bool with_path = !a.from_text.empty();
+  const Vec2 from = with_path ? point(a.from_text) : Vec2::Zero();
+  const Vec2 to = with_path ? point(a.to_text) : Vec2::Zero();
+  const staa::GlobalPathOptions& options = a.options;
+  const PolygonMap map = staa::loadPolygonMap(a.map_file);
 
   staa::GlobalPathPlanner planner(map, options);
   const bool with_inflated = options.inflation_radius_m > 0.0;
-  const double px_per_m = scale ? *scale : staa::autoScale(staa::mapDrawingBox(map));
+  const double px_per_m = a.scale_option->count() > 0 ? a.scale : staa::autoScale(staa::mapDrawingBox(map));
   staa::SvgCanvas canvas = staa::makeMapCanvas(map, px_per_m);
   staa::drawMap(canvas, map, with_inflated ? &planner.inflatedObstacles() : nullptr);
 
@@ -382,107 +340,182 @@ int runSvg(const std::string& map_file, const std::string& out_file, const std::
   const auto legend = staa::mapLegend(with_inflated, !map.goals.empty(), with_path);
   canvas.legend(legend);
   canvas.title(caption);
-  canvas.save(out_file);
-  std::cout << "wrote " << out_file << " (" << fmt(canvas.widthPx(), 0) << " x " << fmt(canvas.heightPx(), 0)
+  canvas.save(a.out_file);
+  std::cout << "wrote " << a.out_file << " (" << fmt(canvas.widthPx(), 0) << " x " << fmt(canvas.heightPx(), 0)
             << " px, " << fmt(px_per_m, 1) << " px/m)\n";
   return 0;
 }
 
-// ---- command line ----
+// ---- command line: one subcommand, parsed, then run ----
 
-int run(int argc, char** argv) {
-  CLI::App app{"staa-map: map tools for the STAA* motion controller: describe, import, generate, plan, draw."};
-  app.require_subcommand(1);
-  app.set_help_all_flag("--help-all", "Print the help of every subcommand");
+constexpr const char* kPointForm = "X,Y (two finite numbers in metres)";
 
-  std::string map_file, out_file, from_text, to_text, inflate_text = "0.3", simplify_text = "0.05",
-                                                     seed_text = "1", scale_text, name, goals_text = "0",
-                                                     goal_clearance_text, count_text = "40", clearance_text = "0.6",
-                                                     spacing_text = "1.5";
+struct InfoArgs {
+  std::string map_file;
   bool json = false;
+};
 
+CLI::App* addInfo(CLI::App& app, InfoArgs& a) {
   auto* info = app.add_subcommand("info", "Describe a polygon map: name, bounds, polygon and vertex counts, "
                                           "convex/non-convex counts, extent, goals, obstacle area.");
-  info->add_option("MAP", map_file, "Polygon map (staa-polygon-map/1 YAML)")->required();
-  info->add_flag("--json", json, "Machine-readable output (one JSON object)");
+  info->add_option("MAP", a.map_file, "Polygon map (staa-polygon-map/1 YAML)")->required();
+  info->add_flag("--json", a.json, "Machine-readable output (one JSON object)");
+  return info;
+}
 
+CLI::App* addImport(CLI::App& app, ImportArgs& a) {
+  namespace cli = staa::cli;
   auto* import = app.add_subcommand("import", "Convert a ROS map_server occupancy map (YAML + PGM) into a "
                                               "polygon map; prints the polygon and vertex counts and the time.");
-  import->add_option("ROS_MAP", map_file, "map_server YAML file (its image is found beside it)")->required();
-  import->add_option("-o,--output", out_file, "Polygon map to write")->required();
-  import->add_option("--simplify", simplify_text, "Douglas-Peucker tolerance in metres (0: every pixel corner)")
+  import->add_option("ROS_MAP", a.ros_map, "map_server YAML file (its image is found beside it)")->required();
+  import->add_option("-o,--output", a.out_file, "Polygon map to write")->required();
+  import->add_option("--simplify", a.options.simplify_m, "Douglas-Peucker tolerance in metres (0: every pixel corner)")
+      ->transform(cli::nonNegative("a tolerance in metres"))
       ->capture_default_str();
-  import->add_option("--goals", goals_text, "Goal locations to place in the map (0: none; see the goals "
-                                            "subcommand)")
+  import->add_option("--goals", a.placement.count, "Goal locations to place in the map (0: none; see the goals "
+                                                   "subcommand)")
+      ->transform(cli::count("a number of goals to place", 0, 100000))
       ->capture_default_str();
-  import->add_option("--goal-clearance", goal_clearance_text,
-                     "Clearance of the goals from obstacles and bounds in metres (default 0.6)");
+  a.clearance_option = import->add_option("--goal-clearance", a.placement.clearance_m,
+                                          "Clearance of the goals from obstacles and bounds in metres")
+                           ->transform(cli::nonNegative("a clearance in metres"))
+                           ->capture_default_str();
+  return import;
+}
 
+struct GenerateArgs {
+  std::string name, out_file;
+  std::uint64_t seed = 1;
+};
+
+CLI::App* addGenerate(CLI::App& app, GenerateArgs& a) {
   auto* generate = app.add_subcommand("generate", "Write one of the paper's maps: office, apartment, clutter "
                                                   "(clutter is random from --seed).");
-  generate->add_option("NAME", name, "office, apartment or clutter")->required();
-  generate->add_option("--seed", seed_text, "Seed of the clutter map (non-negative integer)")->capture_default_str();
-  generate->add_option("-o,--output", out_file, "Polygon map to write")->required();
+  generate->add_option("NAME", a.name, "office, apartment or clutter")->required();
+  generate->add_option("--seed", a.seed, "Seed of the clutter map")
+      ->transform(staa::cli::count("a seed", 0, std::numeric_limits<std::uint64_t>::max()))
+      ->capture_default_str();
+  generate->add_option("-o,--output", a.out_file, "Polygon map to write")->required();
+  return generate;
+}
 
+struct GoalsArgs {
+  std::string map_file, out_file;
+  staa::GoalPlacement placement;
+};
+
+CLI::App* addGoals(CLI::App& app, GoalsArgs& a) {
+  namespace cli = staa::cli;
   auto* goals = app.add_subcommand(
       "goals", "Place goal locations in a polygon map (replacing any): lattice points with --clearance to every "
                "obstacle and the bounds, in the largest connected free region (so every goal is reachable from "
                "every other), spread by farthest-point sampling from a seeded first goal, at least --spacing "
                "apart. Fewer than --count when no more fit.");
-  goals->add_option("MAP", map_file, "Polygon map")->required();
-  goals->add_option("-o,--output", out_file, "Polygon map to write (may be MAP itself)")->required();
-  goals->add_option("--count", count_text, "Number of goals")->capture_default_str();
-  goals->add_option("--clearance", clearance_text, "Distance from every obstacle and the bounds in metres")
+  staa::GoalPlacement& p = a.placement;
+  goals->add_option("MAP", a.map_file, "Polygon map")->required();
+  goals->add_option("-o,--output", a.out_file, "Polygon map to write (may be MAP itself)")->required();
+  goals->add_option("--count", p.count, "Number of goals")
+      ->transform(cli::count("a number of goals", 1, 100000))
       ->capture_default_str();
-  goals->add_option("--spacing", spacing_text, "Least distance between two goals in metres")->capture_default_str();
-  goals->add_option("--seed", seed_text, "Seed of the first goal (non-negative integer)")->capture_default_str();
+  goals->add_option("--clearance", p.clearance_m, "Distance from every obstacle and the bounds in metres")
+      ->transform(cli::nonNegative("a clearance in metres"))
+      ->capture_default_str();
+  goals->add_option("--spacing", p.min_spacing_m, "Least distance between two goals in metres")
+      ->transform(cli::positive("a distance in metres"))
+      ->capture_default_str();
+  goals->add_option("--seed", p.seed, "Seed of the first goal")
+      ->transform(cli::count("a seed", 0, std::numeric_limits<std::uint64_t>::max()))
+      ->capture_default_str();
+  return goals;
+}
 
+struct PathArgs {
+  std::string map_file, from_text, to_text;
+  staa::GlobalPathOptions options;
+  bool json = false;
+};
+
+CLI::App* addPath(CLI::App& app, PathArgs& a) {
+  namespace cli = staa::cli;
   auto* path = app.add_subcommand("path", "Plan the shortest path between two points in the map inflated by "
                                           "--inflate. Exit status 0 also when no path exists (status says why).");
-  path->add_option("MAP", map_file, "Polygon map")->required();
-  path->add_option("--from", from_text, "Start X,Y in metres")->required();
-  path->add_option("--to", to_text, "Goal X,Y in metres")->required();
-  path->add_option("--inflate", inflate_text, "Inflation radius in metres (the robot's radius)")
+  path->add_option("MAP", a.map_file, "Polygon map")->required();
+  path->add_option("--from", a.from_text, "Start X,Y in metres")
+      ->required()
+      ->check(cli::point<2>(kPointForm))
+      ->type_name("X,Y");
+  path->add_option("--to", a.to_text, "Goal X,Y in metres")
+      ->required()
+      ->check(cli::point<2>(kPointForm))
+      ->type_name("X,Y");
+  path->add_option("--inflate", a.options.inflation_radius_m, "Inflation radius in metres (the robot's radius)")
+      ->transform(cli::nonNegative("a radius in metres"))
       ->capture_default_str();
-  path->add_flag("--json", json,
+  path->add_flag("--json", a.json,
                  "Print {\"found\", \"length\", \"path\", \"time_us\", \"status\", \"start_moved\", \"goal_moved\", "
                  "\"expansions\", \"edge_checks\", \"build_us\", \"inflate_m\"}; time_us is the query alone");
+  return path;
+}
 
-  auto* svg = app.add_subcommand("svg", "Draw a map as SVG: obstacles, inflated obstacles, goals, and with "
+CLI::App* addSvg(staa::cli::CommandLine& cl, SvgArgs& a) {
+  namespace cli = staa::cli;
+  auto* svg = cl.app.add_subcommand("svg", "Draw a map as SVG: obstacles, inflated obstacles, goals, and with "
                                         "--from/--to the shortest path.");
-  svg->add_option("MAP", map_file, "Polygon map")->required();
-  svg->add_option("-o,--output", out_file, "SVG file to write")->required();
-  svg->add_option("--from", from_text, "Start X,Y of a path to draw");
-  svg->add_option("--to", to_text, "Goal X,Y of a path to draw");
-  svg->add_option("--inflate", inflate_text, "Inflation radius in metres (0: do not draw inflated obstacles)")
+  svg->add_option("MAP", a.map_file, "Polygon map")->required();
+  svg->add_option("-o,--output", a.out_file, "SVG file to write")->required();
+  auto* from = svg->add_option("--from", a.from_text, "Start X,Y of a path to draw")
+                   ->check(cli::point<2>(kPointForm))
+                   ->type_name("X,Y");
+  auto* to = svg->add_option("--to", a.to_text, "Goal X,Y of a path to draw")
+                 ->check(cli::point<2>(kPointForm))
+                 ->type_name("X,Y");
+  cl.need(from, to, "a path needs both --from and --to");
+  cl.need(to, from, "a path needs both --from and --to");
+  svg->add_option("--inflate", a.options.inflation_radius_m,
+                  "Inflation radius in metres (0: do not draw inflated obstacles)")
+      ->transform(cli::nonNegative("a radius in metres"))
       ->capture_default_str();
-  svg->add_option("--scale", scale_text, "Pixels per metre (default: about 900 px across)");
+  a.scale_option = svg->add_option("--scale", a.scale, "Pixels per metre (default: about 900 px across)")
+                       ->transform(cli::positive("pixels per metre"));
+  return svg;
+}
 
-  // CLI11 reports an unknown subcommand as "a subcommand is required"; name it instead.
-  if (argc > 1 && argv[1][0] != '-') {
-    const std::string first = argv[1];
-    bool known = false;
-    for (const auto* sub : app.get_subcommands({})) known = known || sub->check_name(first);
-    if (!known) {
-      throw InputError("unknown subcommand '" + first + "' (expected info, import, generate, goals, path or svg)");
-    }
+// CLI11 reports an unknown subcommand as "a subcommand is required"; name it instead.
+void rejectUnknownSubcommand(const CLI::App& app, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return;
+  const std::string first = argv[1];
+  for (const auto* sub : app.get_subcommands({})) {
+    if (sub->check_name(first)) return;
   }
+  throw InputError("unknown subcommand '" + first + "' (expected info, import, generate, goals, path or svg)");
+}
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);  // --help: the help of the subcommand given
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "staa-map: " << e.what() << " (see staa-map --help)\n";
-    return kExitBadInput;
-  }
+int run(int argc, char** argv) {
+  staa::cli::CommandLine cl(
+      "staa-map", "staa-map: map tools for the STAA* motion controller: describe, import, generate, plan, draw.");
+  cl.app.require_subcommand(1);
+  cl.app.set_help_all_flag("--help-all", "Print the help of every subcommand");
+  InfoArgs info;
+  ImportArgs import;
+  GenerateArgs generate;
+  GoalsArgs goals;
+  PathArgs path;
+  SvgArgs svg;
+  const CLI::App* info_cmd = addInfo(cl.app, info);
+  const CLI::App* import_cmd = addImport(cl.app, import);
+  const CLI::App* generate_cmd = addGenerate(cl.app, generate);
+  const CLI::App* goals_cmd = addGoals(cl.app, goals);
+  const CLI::App* path_cmd = addPath(cl.app, path);
+  const CLI::App* svg_cmd = addSvg(cl, svg);
+  rejectUnknownSubcommand(cl.app, argc, argv);
+  if (const auto exit = cl.parse(argc, argv)) return *exit;
 
-  if (*info) return runInfo(map_file, json);
-  if (*import) return runImport(map_file, out_file, simplify_text, goals_text, goal_clearance_text);
-  if (*generate) return runGenerate(name, seed_text, out_file);
-  if (*goals) return runGoals(map_file, out_file, count_text, clearance_text, spacing_text, seed_text);
-  if (*path) return runPath(map_file, from_text, to_text, inflate_text, json);
-  if (*svg) return runSvg(map_file, out_file, from_text, to_text, inflate_text, scale_text);
+  if (*info_cmd) return runInfo(info.map_file, info.json);
+  if (*import_cmd) return runImport(import);
+  if (*generate_cmd) return runGenerate(generate.name, generate.seed, generate.out_file);
+  if (*goals_cmd) return runGoals(goals.map_file, goals.out_file, goals.placement);
+  if (*path_cmd) return runPath(path.map_file, point(path.from_text), point(path.to_text), path.options, path.json);
+  if (*svg_cmd) return runSvg(svg);
   return kExitBadInput;
 }
 

@@ -5,6 +5,7 @@
 #include "app/staa-sim/experiment_command.hpp"
 
 #include "app/cli_support.hpp"
+#include "app/staa-sim/sim_options.hpp"
 #include "map/polygon_map.hpp"
 #include "experiment/experiment.hpp"
 #include "experiment/experiment_plots.hpp"
@@ -19,9 +20,9 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
-#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -31,49 +32,8 @@ namespace {
 namespace fs = std::filesystem;
 using cli::InputError;
 
-constexpr int kExitBadInput = 2;
+using cli::kExitBadInput;
 constexpr int kExitRunFailed = 1;
-
-std::vector<std::string> splitList(const std::string& option, const std::string& text) {
-  std::vector<std::string> items;
-  std::string_view rest(text);
-  for (;;) {
-    const std::size_t comma = rest.find(',');
-    items.emplace_back(rest.substr(0, comma));
-    if (comma == std::string_view::npos) break;
-    rest.remove_prefix(comma + 1);
-  }
-  for (const std::string& item : items) {
-    if (item.empty()) throw InputError(option + ": empty item in the list '" + text + "'");
-  }
-  return items;
-}
-
-template <class T>
-void appendUnique(const std::string& option, const std::string& item, std::vector<T>& out, const T& value) {
-  if (std::find(out.begin(), out.end(), value) != out.end()) {
-    throw InputError(option + ": '" + item + "' is listed twice");
-  }
-  out.push_back(value);
-}
-
-std::uint64_t parseCount(const std::string& option, const std::string& text, std::uint64_t min, std::uint64_t max,
-                         std::string_view what) {
-  const auto v = cli::parseUnsigned(text);
-  if (!v || *v < min || *v > max) {
-    throw InputError(option + ": expected " + std::string(what) + " (an integer from " + std::to_string(min) +
-                     " to " + std::to_string(max) + "), got '" + text + "'");
-  }
-  return *v;
-}
-
-double parsePositive(const std::string& option, const std::string& text, std::string_view what) {
-  const auto v = cli::parseDouble(text);
-  if (!v || *v <= 0.0) {
-    throw InputError(option + ": expected " + std::string(what) + " (a finite number > 0), got '" + text + "'");
-  }
-  return *v;
-}
 
 std::string fmt(double v, int decimals) {
   std::ostringstream s;
@@ -117,116 +77,77 @@ void printSummary(std::ostream& out, const std::vector<ExperimentCell>& cells) {
   }
 }
 
-int runCommand(int argc, char** argv) {
-  CLI::App app{"staa-sim experiment: the paper's controller comparison (Sec. IV-B, Fig. 5) and heuristic "
-               "comparison (Sec. IV-C, Fig. 6). Runs every map x controller x mode x agent count (x heuristic "
-               "for STAA*) x run in parallel; writes OUT/results.json, OUT/scores.svg (and heuristics.svg with "
-               "more than one heuristic; PNGs too when rsvg-convert is installed) and prints a summary. Lists "
-               "are comma-separated. Exit 0 on success, 2 on bad input, 1 when a run fails.",
-               "staa-sim experiment"};
-  const unsigned hw = std::thread::hardware_concurrency();
-  std::string maps_text = "office,apartment,clutter", controllers_text = "pd,dwa,staa",
-              modes_text = "cooperative,ghost", agents_text = "1,3,5", runs_text = "3", duration_text = "60",
-              jobs_text = std::to_string(hw == 0 ? 1 : hw), heuristics_text = "path-rtr", budget_ms_text,
-              budget_exp_text, rate_text = "30", seed_text = "1", out_dir,
-              predict_turning_text = StaaConfig{}.predict_turning ? "on" : "off";
+// ---- command line: parse, validate, prepare, run, report ----
+
+// The command line, typed and checked by CLI11, straight into the spec where it can.
+struct Args {
+  ExperimentSpec spec;
+  std::vector<std::string> maps{"office", "apartment", "clutter"};
+  std::optional<cli::BudgetOptions> budget;
+  std::string out_dir;
   bool quiet = false;
-  app.add_option("--maps", maps_text,
+  const CLI::Option* duration_option = nullptr;  // for messages naming the values given
+  const CLI::Option* rate_option = nullptr;
+};
+
+void addListOptions(CLI::App& app, Args& a) {
+  ExperimentSpec& s = a.spec;
+  app.add_option("--maps", a.maps,
                  "office, apartment, clutter (the paper's maps, generated) or polygon map files (a file without goals "
                  "gets 40 placed, 0.6 m from obstacles, 1.5 m apart)")
-      ->capture_default_str();
-  app.add_option("--controllers", controllers_text, "pd, dwa, staa")->capture_default_str();
-  app.add_option("--modes", modes_text, "cooperative, ghost")->capture_default_str();
-  app.add_option("--agents", agents_text, "Agent counts")->capture_default_str();
-  app.add_option("--runs", runs_text, "Runs per cell (run r uses seed + r)")->capture_default_str();
-  app.add_option("--duration", duration_text, "Simulated seconds per run")->capture_default_str();
-  app.add_option("--jobs", jobs_text, "Parallel runs (with --budget-ms keep it at most the number of cores)")
-      ->capture_default_str();
-  app.add_option("--heuristics", heuristics_text, "STAA* heuristics: path-rtr, path-euclid, dijkstra-rtr")
-      ->capture_default_str();
-  app.add_option("--budget-ms", budget_ms_text, "Wall-clock STAA* budget per cycle in ms (default 19 ms at 30 Hz, "
-                                                "scaled with the rate)");
-  app.add_option("--budget-expansions", budget_exp_text,
-                 "STAA* budget per cycle in queue pops: a bit-for-bit reproducible experiment");
-  app.add_option("--rate", rate_text, "Control rate in Hz")->capture_default_str();
-  app.add_option("--predict-turning", predict_turning_text,
-                 "on or off: STAA*'s braking checks also predict turning agents on their circle "
-                 "(StaaConfig::predict_turning)")
-      ->capture_default_str();
-  app.add_option("--seed", seed_text, "Base seed of the runs")->capture_default_str();
-  app.add_option("--out", out_dir, "Output directory (created)")->required();
-  app.add_flag("--quiet", quiet, "No progress line on stderr");
+      ->delimiter(',')
+      ->default_str(cli::joined(a.maps, [](const std::string& m) { return m; }));
+  cli::choice(app.add_option("--controllers", s.controllers, "pd, dwa, staa"), cli::kControllerNames, s.controllers);
+  cli::choice(app.add_option("--modes", s.modes, "cooperative, ghost"), cli::kModeNames, s.modes);
+  app.add_option("--agents", s.agents, "Agent counts")
+      ->delimiter(',')
+      ->transform(cli::count("agent counts", 1, 100))
+      ->default_str(cli::joined(s.agents, [](int n) { return std::to_string(n); }));
+}
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "staa-sim experiment: " << e.what() << " (see staa-sim experiment --help)\n";
-    return kExitBadInput;
-  }
+void addOptions(cli::CommandLine& cl, Args& a) {
+  CLI::App& app = cl.app;
+  ExperimentSpec& s = a.spec;
+  addListOptions(app, a);
+  app.add_option("--runs", s.runs, "Runs per cell (run r uses seed + r)")
+      ->transform(cli::count("runs per cell", 1, 100000))
+      ->capture_default_str();
+  a.duration_option = app.add_option("--duration", s.duration_s, "Simulated seconds per run")
+                          ->transform(cli::positive("simulated seconds"))
+                          ->capture_default_str();
+  const unsigned hw = std::thread::hardware_concurrency();
+  s.jobs = hw == 0 ? 1 : static_cast<int>(hw);
+  app.add_option("--jobs", s.jobs, "Parallel runs (with --budget-ms keep it at most the number of cores)")
+      ->transform(cli::count("parallel runs", 1, 1024))
+      ->capture_default_str();
+  cli::choice(app.add_option("--heuristics", s.heuristics, "STAA* heuristics: path-rtr, path-euclid, dijkstra-rtr"),
+              cli::kHeuristicNames, s.heuristics);
+  a.budget.emplace(cl, "experiment");
+  a.rate_option = app.add_option("--rate", s.rate_hz, "Control rate in Hz")
+                      ->transform(cli::positive("a control rate in Hz"))
+                      ->capture_default_str();
+  bool& predict_turning = s.control.staa.predict_turning;
+  cli::choice(app.add_option("--predict-turning", predict_turning,
+                             "on or off: STAA*'s braking checks also predict turning agents on their circle "
+                             "(StaaConfig::predict_turning)"),
+              std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, predict_turning);
+  app.add_option("--seed", s.seed, "Base seed of the runs")
+      ->transform(cli::count("a seed", 0, std::numeric_limits<std::uint64_t>::max() - 100000))
+      ->capture_default_str();
+  app.add_option("--out", a.out_dir, "Output directory (created)")->required();
+  app.add_flag("--quiet", a.quiet, "No progress line on stderr");
+}
 
-  ExperimentSpec spec;
-  spec.controllers.clear();
-  for (const std::string& item : splitList("--controllers", controllers_text)) {
-    ControllerKind k{};
-    if (!parseControllerKind(item, k)) {
-      throw InputError("--controllers: expected pd, dwa or staa, got '" + item + "'");
-    }
-    appendUnique("--controllers", item, spec.controllers, k);
-  }
-  spec.modes.clear();
-  for (const std::string& item : splitList("--modes", modes_text)) {
-    SimMode m{};
-    if (!parseSimMode(item, m)) throw InputError("--modes: expected cooperative or ghost, got '" + item + "'");
-    appendUnique("--modes", item, spec.modes, m);
-  }
-  spec.agents.clear();
-  for (const std::string& item : splitList("--agents", agents_text)) {
-    appendUnique("--agents", item, spec.agents, static_cast<int>(parseCount("--agents", item, 1, 100, "agent counts")));
-  }
-  spec.heuristics.clear();
-  for (const std::string& item : splitList("--heuristics", heuristics_text)) {
-    HeuristicKind h{};
-    if (!parseHeuristicKind(item.c_str(), h)) {
-      throw InputError("--heuristics: expected path-rtr, path-euclid or dijkstra-rtr, got '" + item + "'");
-    }
-    appendUnique("--heuristics", item, spec.heuristics, h);
-  }
-  if (predict_turning_text != "on" && predict_turning_text != "off") {
-    throw InputError("--predict-turning: expected on or off, got '" + predict_turning_text + "'");
-  }
-  spec.control.staa.predict_turning = predict_turning_text == "on";
-  spec.runs = static_cast<int>(parseCount("--runs", runs_text, 1, 100000, "runs per cell"));
-  spec.jobs = static_cast<int>(parseCount("--jobs", jobs_text, 1, 1024, "parallel runs"));
-  spec.duration_s = parsePositive("--duration", duration_text, "simulated seconds");
-  spec.rate_hz = parsePositive("--rate", rate_text, "a control rate in Hz");
-  if (spec.duration_s * spec.rate_hz > 1e8) {
-    throw InputError("--duration " + duration_text + " at --rate " + rate_text + " is more than 1e8 cycles per run");
-  }
-  spec.seed = parseCount("--seed", seed_text, 0, std::numeric_limits<std::uint64_t>::max() - 100000, "a seed");
-  if (!budget_ms_text.empty() && !budget_exp_text.empty()) {
-    throw InputError("--budget-ms " + budget_ms_text + " and --budget-expansions " + budget_exp_text +
-                     " exclude each other: give a wall-clock budget or an expansion budget, not both");
-  }
-  if (!budget_exp_text.empty()) {
-    spec.budget = staa::BudgetSpec::expansionsOf(static_cast<std::uint32_t>(parseCount(
-        "--budget-expansions", budget_exp_text, 1, std::numeric_limits<std::uint32_t>::max(), "queue pops per cycle")));
-  } else if (!budget_ms_text.empty()) {
-    spec.budget = staa::BudgetSpec::wallClockMs(parsePositive("--budget-ms", budget_ms_text, "milliseconds per cycle"));
-  } else {
-    spec.budget = staa::BudgetSpec::defaultWallClock(spec.rate_hz);
-  }
-
-  // Maps last among the checks: loading them is the slow part of validation.
-  for (const std::string& item : splitList("--maps", maps_text)) {
+// Loading the maps is the slow part of validation: last.
+void loadMaps(Args& a) {
+  for (const std::string& item : a.maps) {
     ExperimentMap m;
     try {
-      m = loadExperimentMap(item, spec.map_seed);
+      m = loadExperimentMap(item, a.spec.map_seed);
     } catch (const MapError& e) {
       throw InputError(std::string("--maps: ") + e.what());
     }
-    for (const ExperimentMap& other : spec.maps) {
+    for (const ExperimentMap& other : a.spec.maps) {
       if (other.name == m.name) {
         throw InputError("--maps: '" + item + "': a map named '" + m.name + "' is already in the list");
       }
@@ -237,60 +158,79 @@ int runCommand(int argc, char** argv) {
                 << " (clearance " << fmt(kExperimentGoalPlacement.clearance_m, 1) << " m, spacing "
                 << fmt(kExperimentGoalPlacement.min_spacing_m, 1) << " m)\n";
     }
-    spec.maps.push_back(std::move(m));
+    a.spec.maps.push_back(std::move(m));
   }
+}
 
-  // The whole spec (e.g. enough goals in every map for the most agents) before the runs.
-  validateExperimentSpec(spec);
+// The whole spec (e.g. enough goals in every map for the most agents) before the runs.
+void validate(Args& a) {
+  ExperimentSpec& s = a.spec;
+  cli::requireDistinct("--controllers", s.controllers, [](ControllerKind k) { return toString(k); });
+  cli::requireDistinct("--modes", s.modes, [](SimMode m) { return toString(m); });
+  cli::requireDistinct("--agents", s.agents, [](int n) { return std::to_string(n); });
+  cli::requireDistinct("--heuristics", s.heuristics, [](HeuristicKind h) { return toString(h); });
+  cli::checkCycles(a.duration_option, a.rate_option, s.duration_s, s.rate_hz, " per run");
+  s.budget = a.budget->spec(s.rate_hz);
+  loadMaps(a);
+  validateExperimentSpec(s);
+}
 
-  // The output directory before the runs: a bad --out fails now, not after an hour.
+// The output directory before the runs: a bad --out fails now, not after an hour.
+fs::path prepareOutput(const std::string& out_dir) {
   const fs::path dir(out_dir);
-  {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    const fs::path probe = dir / ".staa-experiment-write-test";
-    std::ofstream test(probe, std::ios::binary | std::ios::trunc);
-    if (!test) {
-      throw InputError("--out: cannot write into '" + out_dir + "'" + (ec ? " (" + ec.message() + ")" : std::string()));
-    }
-    test.close();
-    fs::remove(probe, ec);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  const fs::path probe = dir / ".staa-experiment-write-test";
+  std::ofstream test(probe, std::ios::binary | std::ios::trunc);
+  if (!test) {
+    throw InputError("--out: cannot write into '" + out_dir + "'" + (ec ? " (" + ec.message() + ")" : std::string()));
+  }
+  test.close();
+  fs::remove(probe, ec);
+  return dir;
+}
+
+// One progress line, rewritten in place after every run.
+class ProgressLine {
+ public:
+  ProgressLine(const ExperimentSpec& spec, bool quiet) : spec_(spec), quiet_(quiet) {}
+
+  void announce() const {
+    if (quiet_) return;
+    const std::size_t total = planExperiment(spec_).size();
+    std::cerr << "staa-sim experiment: " << total << " runs of " << fmt(spec_.duration_s, 1) << " s ("
+              << spec_.maps.size() << (spec_.maps.size() == 1 ? " map, " : " maps, ") << spec_.runs
+              << (spec_.runs == 1 ? " run" : " runs") << " per cell, " << spec_.budget.describe()
+              << " per STAA* cycle) on " << spec_.jobs << (spec_.jobs == 1 ? " thread\n" : " threads\n");
   }
 
-  const std::size_t total = planExperiment(spec).size();
-  if (!quiet) {
-    std::cerr << "staa-sim experiment: " << total << " runs of " << fmt(spec.duration_s, 1) << " s ("
-              << spec.maps.size() << (spec.maps.size() == 1 ? " map, " : " maps, ") << spec.runs
-              << (spec.runs == 1 ? " run" : " runs") << " per cell, "
-              << spec.budget.describe()
-              << " per STAA* cycle) on " << spec.jobs << (spec.jobs == 1 ? " thread\n" : " threads\n");
-  }
-
-  std::size_t last_width = 0;
-  auto progress = [&](const ExperimentProgress& p) {
-    if (quiet) return;
+  void update(const ExperimentProgress& p) {
+    if (quiet_) return;
     const ExperimentRun& r = *p.last;
     std::string line = "[" + std::to_string(p.done) + "/" + std::to_string(p.total) + "] " + clock(p.elapsed_s) +
                        " elapsed, ~" + clock(p.remaining_s) + " left; last: " + r.map + " " + toString(r.controller) +
-                       (r.heuristic && spec.heuristics.size() > 1 ? std::string("/") + toString(*r.heuristic) : "") +
+                       (r.heuristic && spec_.heuristics.size() > 1 ? std::string("/") + toString(*r.heuristic) : "") +
                        " " + toString(r.mode) + " x" + std::to_string(r.agents) + " run " + std::to_string(r.run) +
                        ": score " + std::to_string(r.result.score);
     const std::size_t width = line.size();
-    if (width < last_width) line += std::string(last_width - width, ' ');
-    last_width = width;
+    if (width < last_width_) line += std::string(last_width_ - width, ' ');
+    last_width_ = width;
     std::cerr << '\r' << line << std::flush;
-  };
-
-  std::vector<ExperimentRun> runs;
-  try {
-    runs = runExperiment(spec, progress);
-  } catch (const std::exception& e) {
-    if (!quiet && last_width > 0) std::cerr << '\n';
-    std::cerr << "staa-sim experiment: " << e.what() << '\n';
-    return kExitRunFailed;
   }
-  if (!quiet && last_width > 0) std::cerr << '\n';
 
+  // Ends the line (before anything else is said on stderr).
+  void finish() const {
+    if (!quiet_ && last_width_ > 0) std::cerr << '\n';
+  }
+
+ private:
+  const ExperimentSpec& spec_;
+  bool quiet_;
+  std::size_t last_width_ = 0;
+};
+
+// results.json, the figures and the summary table.
+int report(const fs::path& dir, const ExperimentSpec& spec, const std::vector<ExperimentRun>& runs) {
   std::vector<fs::path> written;
   ExperimentPlots plots;
   try {
@@ -308,6 +248,33 @@ int runCommand(int argc, char** argv) {
   for (const fs::path& f : written) std::cout << ' ' << f.string();
   std::cout << '\n';
   return 0;
+}
+
+int runCommand(int argc, char** argv) {
+  cli::CommandLine cl("staa-sim experiment",
+                      "staa-sim experiment: the paper's controller comparison (Sec. IV-B, Fig. 5) and heuristic "
+                      "comparison (Sec. IV-C, Fig. 6). Runs every map x controller x mode x agent count (x heuristic "
+                      "for STAA*) x run in parallel; writes OUT/results.json, OUT/scores.svg (and heuristics.svg with "
+                      "more than one heuristic; PNGs too when rsvg-convert is installed) and prints a summary. Lists "
+                      "are comma-separated. Exit 0 on success, 2 on bad input, 1 when a run fails.");
+  Args args;
+  addOptions(cl, args);
+  if (const auto exit = cl.parse(argc, argv)) return *exit;
+  validate(args);
+  const fs::path dir = prepareOutput(args.out_dir);
+
+  ProgressLine progress(args.spec, args.quiet);
+  progress.announce();
+  std::vector<ExperimentRun> runs;
+  try {
+    runs = runExperiment(args.spec, [&](const ExperimentProgress& p) { progress.update(p); });
+  } catch (const std::exception& e) {
+    progress.finish();
+    std::cerr << "staa-sim experiment: " << e.what() << '\n';
+    return kExitRunFailed;
+  }
+  progress.finish();
+  return report(dir, args.spec, runs);
 }
 
 }  // namespace

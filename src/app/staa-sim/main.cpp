@@ -24,6 +24,7 @@
 
 #include "app/cli_support.hpp"
 #include "app/staa-sim/experiment_command.hpp"
+#include "app/staa-sim/sim_options.hpp"
 #include "control/dwa_controller.hpp"
 #include "control/pd_controller.hpp"
 
@@ -31,7 +32,6 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -57,51 +57,9 @@ using staa::Vec2;
 using Json = nlohmann::ordered_json;
 using staa::distributionJson;
 
-constexpr int kExitBadInput = 2;
-constexpr int kExitRunFailed = 1;
-
-
 using staa::cli::InputError;
-
-// ---- parsing of values (std::from_chars: no locale, no trailing garbage) ----
-
-using staa::cli::parseDouble;
-
-using staa::cli::parseUnsigned;
-
-double parsePositive(const std::string& option, const std::string& text, std::string_view what) {
-  const auto v = parseDouble(text);
-  if (!v || *v <= 0.0) {
-    throw InputError(option + ": expected " + std::string(what) + " (a finite number > 0), got '" + text + "'");
-  }
-  return *v;
-}
-
-std::uint64_t parseCount(const std::string& option, const std::string& text, std::uint64_t min, std::uint64_t max,
-                         std::string_view what) {
-  const auto v = parseUnsigned(text);
-  if (!v || *v < min || *v > max) {
-    throw InputError(option + ": expected " + std::string(what) + " (an integer from " + std::to_string(min) +
-                     " to " + std::to_string(max) + "), got '" + text + "'");
-  }
-  return *v;
-}
-
-// "X,Y,TH": three finite numbers, metres and radians.
-Pose2 parsePose(const std::string& option, const std::string& text) {
-  std::vector<std::string_view> parts;
-  std::string_view rest(text);
-  for (std::size_t comma; (comma = rest.find(',')) != std::string_view::npos;) {
-    parts.push_back(rest.substr(0, comma));
-    rest.remove_prefix(comma + 1);
-  }
-  parts.push_back(rest);
-  if (parts.size() == 3) {
-    const auto x = parseDouble(parts[0]), y = parseDouble(parts[1]), th = parseDouble(parts[2]);
-    if (x && y && th) return Pose2{*x, *y, *th};
-  }
-  throw InputError(option + ": expected X,Y,TH (three finite numbers: metres, metres, radians), got '" + text + "'");
-}
+using staa::cli::kExitBadInput;
+constexpr int kExitRunFailed = 1;
 
 // ---- output helpers ----
 
@@ -122,8 +80,8 @@ struct Request {
   staa::Scenario scenario;
   std::string map_label;  // the map file as given (or as the scenario resolved it)
   std::string scenario_file;
-  std::string controller;
-  std::string mode;
+  staa::ControllerKind controller = staa::ControllerKind::kStaa;
+  staa::SimMode mode = staa::SimMode::kCooperative;
   int agents = 1;
   std::uint64_t seed = 1;
   staa::SimOptions options;
@@ -179,8 +137,8 @@ Json resultJson(const Request& rq, const staa::SimResult& r) {
   j["map"] = rq.map_label;
   j["scenario"] = rq.scenario_file.empty() ? Json(nullptr) : Json(rq.scenario_file);
   j["robot"] = rq.scenario.robot.name;
-  j["controller"] = rq.controller;
-  j["mode"] = rq.mode;
+  j["controller"] = staa::toString(rq.controller);
+  j["mode"] = staa::toString(rq.mode);
   j["agents"] = rq.agents;
   j["seed"] = rq.seed;
   j["rate_hz"] = o.rate_hz;
@@ -257,36 +215,46 @@ void makeSvgDir(const fs::path& dir) {
   }
 }
 
+void announce(const Request& rq) {
+  const auto& o = rq.options;
+  std::cerr << "staa-sim: " << rq.scenario.name << ": " << fmtPose(rq.scenario.start) << " -> "
+            << fmtPose(rq.scenario.goal) << ", " << rq.scenario.movers.size()
+            << (rq.scenario.movers.size() == 1 ? " mover, " : " movers, ") << staa::toString(rq.controller) << " ("
+            << staa::toString(rq.heuristic) << ", " << o.budget.describe() << " per cycle), " << fmt(o.duration_s, 1)
+            << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
+}
+
+// One line per simulated second; the callback runs outside the timed cycle.
+void reportEverySecond(staa::SimOptions& o) {
+  const double rate = o.rate_hz;
+  o.on_cycle = [rate, last = 0L](const staa::World& world, const staa::CycleOutput& out, int cycle) mutable {
+    const long second = static_cast<long>(std::floor(static_cast<double>(cycle) / rate + 1e-9));
+    if (second <= last) return;
+    last = second;
+    const staa::RobotState& rs = world.robot();
+    std::fprintf(stderr, "t=%.1fs pos=(%.2f,%.2f) v=%.2f state=%s\n", world.time(), rs.pose.x, rs.pose.y, rs.v,
+                 staa::toString(out.state));
+  };
+}
+
+// The paper's baselines run in the same cycle in place of STAA* (null: STAA*).
+std::unique_ptr<staa::LocalController> baselineController(const Request& rq) {
+  if (rq.controller == staa::ControllerKind::kPd) return std::make_unique<staa::PdController>(rq.scenario.robot);
+  if (rq.controller == staa::ControllerKind::kDwa) {
+    return std::make_unique<staa::DwaController>(rq.scenario.robot, rq.options.control.local);
+  }
+  return nullptr;
+}
+
 int simulate(Request& rq) {
   std::ofstream json_out;
   openJsonOutput(rq.json_file, json_out);
   makeSvgDir(rq.options.svg_dir);
-
   if (!rq.quiet) {
-    const auto& o = rq.options;
-    std::cerr << "staa-sim: " << rq.scenario.name << ": " << fmtPose(rq.scenario.start) << " -> "
-              << fmtPose(rq.scenario.goal) << ", " << rq.scenario.movers.size()
-              << (rq.scenario.movers.size() == 1 ? " mover, " : " movers, ") << rq.controller
-              << " (" << staa::toString(rq.heuristic) << ", "
-              << o.budget.describe()
-              << " per cycle), " << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
-    // One line per simulated second; the callback runs outside the timed cycle.
-    const double rate = o.rate_hz;
-    rq.options.on_cycle = [rate, last = 0L](const staa::World& world, const staa::CycleOutput& out,
-                                            int cycle) mutable {
-      const long second = static_cast<long>(std::floor(static_cast<double>(cycle) / rate + 1e-9));
-      if (second <= last) return;
-      last = second;
-      const staa::RobotState& rs = world.robot();
-      std::fprintf(stderr, "t=%.1fs pos=(%.2f,%.2f) v=%.2f state=%s\n", world.time(), rs.pose.x, rs.pose.y, rs.v,
-                   staa::toString(out.state));
-    };
+    announce(rq);
+    reportEverySecond(rq.options);
   }
-
-  // The paper's baselines run in the same cycle in place of STAA* (owned here, for the run).
-  std::unique_ptr<staa::LocalController> baseline;
-  if (rq.controller == "pd") baseline = std::make_unique<staa::PdController>(rq.scenario.robot);
-  if (rq.controller == "dwa") baseline = std::make_unique<staa::DwaController>(rq.scenario.robot, rq.options.control.local);
+  const std::unique_ptr<staa::LocalController> baseline = baselineController(rq);  // owned here, for the run
   rq.options.controller = baseline.get();
 
   staa::SimResult result;
@@ -309,9 +277,6 @@ struct MultiRequest {
   std::string map_label;       // the map file as given
   bool goals_placed = false;   // the file had no goals: placed for the run
   staa::RobotProfile robot;
-  std::string controller;
-  std::string mode;
-  std::uint64_t seed = 1;
   staa::HeuristicKind heuristic = staa::HeuristicKind::kPathRtr;
   staa::MultiSimOptions options;
   std::string json_file;
@@ -431,8 +396,8 @@ void writeMultiFrame(const fs::path& file, const MultiRequest& rq, const staa::M
 
   char caption[200];
   std::snprintf(caption, sizeof caption, "%s: t = %.2f s, %zu %s (%s, %s): goals %d, collisions %d",
-                rq.map.name.c_str(), world.time(), n, n == 1 ? "agent" : "agents", rq.mode.c_str(),
-                rq.controller.c_str(), goals_reached, collisions);
+                rq.map.name.c_str(), world.time(), n, n == 1 ? "agent" : "agents", staa::toString(rq.options.mode),
+                staa::toString(rq.options.controller), goals_reached, collisions);
   canvas.title(caption);
   canvas.scaleBar();
   const bool ghost_mode = rq.options.mode == staa::SimMode::kGhost;
@@ -455,9 +420,9 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
   j["map"] = rq.map_label;
   j["scenario"] = nullptr;
   j["robot"] = rq.robot.name;
-  j["controller"] = rq.controller;
-  j["mode"] = rq.mode;
-  j["seed"] = rq.seed;
+  j["controller"] = staa::toString(o.controller);
+  j["mode"] = staa::toString(o.mode);
+  j["seed"] = o.seed;
   j["rate_hz"] = o.rate_hz;
   j["duration_s"] = o.duration_s;
   j["budget"] = staa::budgetJson(o.budget);
@@ -498,8 +463,8 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
 
 std::string multiSummary(const MultiRequest& rq, const staa::MultiSimResult& r, double min_clearance, int frames) {
   std::ostringstream s;
-  s << r.agents.size() << (r.agents.size() == 1 ? " agent, " : " agents, ") << rq.mode << ", " << rq.controller
-    << ", " << fmt(r.duration_s) << " s: score " << r.score << " (goals " << r.goals_reached << ", collisions "
+  s << r.agents.size() << (r.agents.size() == 1 ? " agent, " : " agents, ") << staa::toString(rq.options.mode) << ", "
+    << staa::toString(rq.options.controller) << ", " << fmt(r.duration_s) << " s: score " << r.score << " (goals " << r.goals_reached << ", collisions "
     << r.collisions << (rq.options.mode == staa::SimMode::kGhost ? ", observed agent 0" : "") << "); per agent goals ";
   for (std::size_t i = 0; i < r.agents.size(); ++i) s << (i ? "/" : "") << r.agents[i].goals_reached;
   s << ", collisions ";
@@ -513,74 +478,111 @@ std::string multiSummary(const MultiRequest& rq, const staa::MultiSimResult& r, 
   return s.str();
 }
 
+void announceMulti(const MultiRequest& rq) {
+  const auto& o = rq.options;
+  std::cerr << "staa-sim: " << rq.map.name << ": " << o.agents << (o.agents == 1 ? " agent, " : " agents, ")
+            << staa::toString(o.mode) << ", " << staa::toString(o.controller) << " (" << staa::toString(rq.heuristic)
+            << ", " << o.budget.describe() << " per cycle), " << rq.map.goals.size() << " goal locations, seed "
+            << o.seed << ", " << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
+}
+
+// Per step of a multi-agent run, outside the simulated cycle: clearance, progress (a goal
+// reached shows as a new current goal), trails, frames and a line per simulated second.
+class MultiStepWatcher {
+ public:
+  explicit MultiStepWatcher(const MultiRequest& rq)
+      : rq_(rq),
+        clearance_(rq.map),
+        reached_(static_cast<std::size_t>(rq.options.agents), 0),
+        trails_(rq.svg_dir.empty() ? 0 : static_cast<std::size_t>(rq.options.agents)),
+        trail_points_(static_cast<std::size_t>(std::ceil(kTrailSeconds * rq.options.rate_hz)) + 1) {}
+
+  void step(const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle) {
+    clearance_.update(world, rq_);
+    const Score score = countGoals(world, goals);
+    extendTrails(world);
+    if (!rq_.svg_dir.empty() && cycle % rq_.svg_every == 0) writeFrame(world, goals, cycle, score);
+    const long second = static_cast<long>(std::floor(world.time() + 1e-9));
+    if (!rq_.quiet && second > last_second_) {
+      last_second_ = second;
+      std::fprintf(stderr, "t=%.1fs goals=%d collisions=%d agent0=(%.2f,%.2f)\n", world.time(), score.goals,
+                   score.collisions, world.agent(0).pose.x, world.agent(0).pose.y);
+    }
+  }
+
+  double clearance() const { return clearance_.value(); }
+  int frames() const { return frames_; }
+
+ private:
+  struct Score {
+    int goals = 0;
+    int collisions = 0;
+  };
+
+  // The counted agents' goals reached so far and collision episodes.
+  Score countGoals(const staa::MultiWorld& world, std::span<const Vec2> goals) {
+    if (last_goals_.empty()) last_goals_.assign(goals.begin(), goals.end());
+    Score score;
+    for (std::size_t i = 0; i < goals.size(); ++i) {
+      if (goals[i] != last_goals_[i]) ++reached_[i];
+      last_goals_[i] = goals[i];
+      if (counted(rq_, i)) {
+        score.goals += reached_[i];
+        score.collisions += world.collisionEpisodes(i);
+      }
+    }
+    return score;
+  }
+
+  void extendTrails(const staa::MultiWorld& world) {
+    for (std::size_t i = 0; i < trails_.size(); ++i) {
+      trails_[i].push_back(world.agent(i).pose.position());
+      if (trails_[i].size() > trail_points_) trails_[i].pop_front();
+    }
+  }
+
+  void writeFrame(const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle, const Score& score) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.svg", cycle);
+    writeMultiFrame(rq_.svg_dir / name, rq_, world, goals, trails_, score.goals, score.collisions);
+    ++frames_;
+  }
+
+  const MultiRequest& rq_;
+  ClearanceTracker clearance_;
+  std::vector<Vec2> last_goals_;
+  std::vector<int> reached_;
+  std::vector<std::deque<Vec2>> trails_;
+  std::size_t trail_points_;
+  int frames_ = 0;
+  long last_second_ = 0;
+};
+
 int simulateMulti(MultiRequest& rq) {
   std::ofstream json_out;
   openJsonOutput(rq.json_file, json_out);
   makeSvgDir(rq.svg_dir);
+  if (!rq.quiet) announceMulti(rq);
 
-  auto& o = rq.options;
-  if (!rq.quiet) {
-    std::cerr << "staa-sim: " << rq.map.name << ": " << o.agents << (o.agents == 1 ? " agent, " : " agents, ")
-              << rq.mode << ", " << rq.controller << " (" << staa::toString(rq.heuristic) << ", "
-              << o.budget.describe()
-              << " per cycle), " << rq.map.goals.size() << " goal locations, seed " << rq.seed << ", "
-              << fmt(o.duration_s, 1) << " s at " << fmt(o.rate_hz, 1) << " Hz\n";
-  }
-
-  // Per step, outside the simulated cycle: clearance, progress (a goal reached shows as a new
-  // current goal), trails and frames.
-  ClearanceTracker clearance(rq.map);
-  std::vector<Vec2> last_goals;
-  std::vector<int> reached(static_cast<std::size_t>(o.agents), 0);
-  std::vector<std::deque<Vec2>> trails(rq.svg_dir.empty() ? 0 : static_cast<std::size_t>(o.agents));
-  const auto trail_points = static_cast<std::size_t>(std::ceil(kTrailSeconds * o.rate_hz)) + 1;
-  int frames = 0;
-  long last_second = 0;
-  o.on_step_goals = [&](const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle) {
-    clearance.update(world, rq);
-    if (last_goals.empty()) last_goals.assign(goals.begin(), goals.end());
-    int goals_now = 0, collisions_now = 0;
-    for (std::size_t i = 0; i < goals.size(); ++i) {
-      if (goals[i] != last_goals[i]) ++reached[i];
-      last_goals[i] = goals[i];
-      if (counted(rq, i)) {
-        goals_now += reached[i];
-        collisions_now += world.collisionEpisodes(i);
-      }
-    }
-    for (std::size_t i = 0; i < trails.size(); ++i) {
-      trails[i].push_back(world.agent(i).pose.position());
-      if (trails[i].size() > trail_points) trails[i].pop_front();
-    }
-    if (!rq.svg_dir.empty() && cycle % rq.svg_every == 0) {
-      char name[32];
-      std::snprintf(name, sizeof name, "frame_%05d.svg", cycle);
-      writeMultiFrame(rq.svg_dir / name, rq, world, goals, trails, goals_now, collisions_now);
-      ++frames;
-    }
-    const long second = static_cast<long>(std::floor(world.time() + 1e-9));
-    if (!rq.quiet && second > last_second) {
-      last_second = second;
-      std::fprintf(stderr, "t=%.1fs goals=%d collisions=%d agent0=(%.2f,%.2f)\n", world.time(), goals_now,
-                   collisions_now, world.agent(0).pose.x, world.agent(0).pose.y);
-    }
+  MultiStepWatcher watcher(rq);
+  rq.options.on_step_goals = [&watcher](const staa::MultiWorld& world, std::span<const Vec2> goals, int cycle) {
+    watcher.step(world, goals, cycle);
   };
-
   staa::MultiSimResult result;
   try {
-    result = staa::runMultiAgent(rq.map, rq.robot, o);
+    result = staa::runMultiAgent(rq.map, rq.robot, rq.options);
   } catch (const std::exception& e) {
     std::cerr << "staa-sim: the run failed: " << e.what() << '\n';
     return kExitRunFailed;
   }
-  writeJsonOutput(rq.json_file, json_out, multiResultJson(rq, result, clearance.value(), frames));
-  std::cout << multiSummary(rq, result, clearance.value(), frames) << '\n';
+  writeJsonOutput(rq.json_file, json_out, multiResultJson(rq, result, watcher.clearance(), watcher.frames()));
+  std::cout << multiSummary(rq, result, watcher.clearance(), watcher.frames()) << '\n';
   return 0;
 }
 
 // Loads --map for a multi-agent run: the agents start on distinct goal locations and drive
 // between them, so a map without goals gets them placed as the experiment places them.
-void loadMultiMap(MultiRequest& rq, const std::string& map_file, const std::string& agents_text) {
+void loadMultiMap(MultiRequest& rq, const std::string& map_file) {
   rq.map = staa::loadPolygonMap(map_file);
   rq.map_label = map_file;
   if (rq.map.name.empty()) rq.map.name = fs::path(map_file).stem().string();
@@ -602,184 +604,213 @@ void loadMultiMap(MultiRequest& rq, const std::string& map_file, const std::stri
                      std::to_string(goals));
   }
   if (goals < static_cast<std::size_t>(rq.options.agents)) {
-    throw InputError("--agents " + agents_text + ": the map " + map_file + " has only " + std::to_string(goals) +
-                     " goal locations (each agent starts on its own)");
+    throw InputError("--agents " + std::to_string(rq.options.agents) + ": the map " + map_file + " has only " +
+                     std::to_string(goals) + " goal locations (each agent starts on its own)");
   }
 }
 
-// ---- command line ----
+// ---- command line: parse, validate, then one run ----
 
-int run(int argc, char** argv) {
-  if (argc > 1 && std::string_view(argv[1]) == "experiment") {
-    return staa::runExperimentCommand(argc - 1, argv + 1);
-  }
-
-  CLI::App app{"staa-sim: run the STAA* control cycle against a simulated world: one robot from --start to "
-               "--goal in a polygon map, or a scenario among scripted movers. Exit 0 on a completed run "
-               "(reached or not), 2 on bad input."};
-  std::string map_file, scenario_file, robot_file, start_text, goal_text, controller = "staa", mode = "cooperative",
-              agents_text = "1", duration_text = "60", rate_text = "30", seed_text = "1", budget_ms_text,
-              budget_exp_text, heuristic_text = "path-rtr", json_file, svg_dir, svg_every_text = "15";
+// The command line, typed and checked by CLI11.
+struct Args {
+  std::string map_file, scenario_file, start_text, goal_text, robot_file, json_file, svg_dir;
+  staa::ControllerKind controller = staa::ControllerKind::kStaa;
+  staa::SimMode mode = staa::SimMode::kCooperative;
+  int agents = 1;
+  double duration_s = 60.0;
+  double rate_hz = 30.0;
+  std::uint64_t seed = 1;
+  std::optional<staa::cli::BudgetOptions> budget;
+  staa::HeuristicKind heuristic = staa::HeuristicKind::kPathRtr;
+  int svg_every = 15;
   bool quiet = false;
+  const CLI::Option* duration_option = nullptr;  // for messages naming the values given
+  const CLI::Option* rate_option = nullptr;
 
-  app.add_option("--map", map_file, "Polygon map (staa-polygon-map/1 YAML)");
-  app.add_option("--scenario", scenario_file, "Scenario (staa-scenario/1 YAML): map, robot, start, goal, movers");
-  app.add_option("--start", start_text, "Start pose X,Y,TH (metres, radians)");
-  app.add_option("--goal", goal_text, "Goal pose X,Y,TH (metres, radians)");
-  app.add_option("--robot", robot_file, "Robot profile (staa-robot/1 YAML; default: the paper's agent, or the "
-                                        "scenario's profile)");
-  app.add_option("--controller", controller, "staa, dwa (predictive dynamic window) or pd (carrot + force field)")
+  bool multi() const { return agents > 1 || mode == staa::SimMode::kGhost; }
+};
+
+constexpr const char* kPoseForm = "X,Y,TH (three finite numbers: metres, metres, radians)";
+
+void addOptions(staa::cli::CommandLine& cl, Args& a) {
+  namespace cli = staa::cli;
+  CLI::App& app = cl.app;
+  auto* map = app.add_option("--map", a.map_file, "Polygon map (staa-polygon-map/1 YAML)");
+  auto* scenario =
+      app.add_option("--scenario", a.scenario_file, "Scenario (staa-scenario/1 YAML): map, robot, start, goal, movers");
+  auto* start = app.add_option("--start", a.start_text, "Start pose X,Y,TH (metres, radians)")
+                    ->check(cli::point<3>(kPoseForm))
+                    ->type_name("X,Y,TH");
+  auto* goal = app.add_option("--goal", a.goal_text, "Goal pose X,Y,TH (metres, radians)")
+                   ->check(cli::point<3>(kPoseForm))
+                   ->type_name("X,Y,TH");
+  for (CLI::Option* single : {map, start, goal}) {
+    cl.exclude(single, scenario, "the scenario names its map, start and goal");
+  }
+  app.add_option("--robot", a.robot_file, "Robot profile (staa-robot/1 YAML; default: the paper's agent, or the "
+                                          "scenario's profile)");
+  cli::choice(app.add_option("--controller", a.controller,
+                             "staa, dwa (predictive dynamic window) or pd (carrot + force field)"),
+              cli::kControllerNames, a.controller);
+  cli::choice(app.add_option("--mode", a.mode,
+                             "cooperative (every agent runs --controller and avoids the others) or ghost (agent 0 "
+                             "runs --controller, the others drive through everything); ghost, or --agents > 1, "
+                             "makes a multi-agent run"),
+              cli::kModeNames, a.mode);
+  app.add_option("--agents", a.agents, "Number of agents; more than 1 makes a multi-agent run: the agents "
+                                       "drive between random goals of --map (no --start/--goal/--scenario)")
+      ->transform(cli::count("a number of agents", 1, 1000))
       ->capture_default_str();
-  app.add_option("--mode", mode, "cooperative (every agent runs --controller and avoids the others) or ghost "
-                               "(agent 0 runs --controller, the others drive through everything); ghost, or "
-                               "--agents > 1, makes a multi-agent run")
+  a.duration_option = app.add_option("--duration", a.duration_s, "Simulated seconds")
+                          ->transform(cli::positive("simulated seconds"))
+                          ->capture_default_str();
+  a.rate_option = app.add_option("--rate", a.rate_hz, "Control rate in Hz")
+                      ->transform(cli::positive("a control rate in Hz"))
+                      ->capture_default_str();
+  app.add_option("--seed", a.seed, "Seed of a multi-agent run's starts and goals (recorded in the JSON; "
+                                   "single-robot runs are deterministic)")
+      ->transform(cli::count("a seed", 0, std::numeric_limits<std::uint64_t>::max()))
       ->capture_default_str();
-  app.add_option("--agents", agents_text, "Number of agents; more than 1 makes a multi-agent run: the agents "
-                                          "drive between random goals of --map (no --start/--goal/--scenario)")
+  a.budget.emplace(cl, "run");
+  cli::choice(app.add_option("--heuristic", a.heuristic, "path-rtr, path-euclid or dijkstra-rtr"),
+              cli::kHeuristicNames, a.heuristic);
+  app.add_option("--json", a.json_file, "Write the results as JSON to this file");
+  app.add_option("--svg", a.svg_dir, "Write frames (frame_NNNNN.svg) into this directory: like the paper's Fig. 1 "
+                                     "for one robot, the whole map with every agent for a multi-agent run");
+  app.add_option("--svg-every", a.svg_every, "Cycles between frames")
+      ->transform(cli::count("cycles between frames", 1, 1'000'000))
       ->capture_default_str();
-  app.add_option("--duration", duration_text, "Simulated seconds")->capture_default_str();
-  app.add_option("--rate", rate_text, "Control rate in Hz")->capture_default_str();
-  app.add_option("--seed", seed_text, "Seed of a multi-agent run's starts and goals (recorded in the JSON; "
-                                      "single-robot runs are deterministic)")
-      ->capture_default_str();
-  app.add_option("--budget-ms", budget_ms_text, "Wall-clock STAA* budget per cycle in ms (default 19 ms at 30 Hz, "
-                                                "scaled with the rate)");
-  app.add_option("--budget-expansions", budget_exp_text,
-                 "STAA* budget per cycle in queue pops: a bit-for-bit reproducible run");
-  app.add_option("--heuristic", heuristic_text, "path-rtr, path-euclid or dijkstra-rtr")->capture_default_str();
-  app.add_option("--json", json_file, "Write the results as JSON to this file");
-  app.add_option("--svg", svg_dir, "Write frames (frame_NNNNN.svg) into this directory: like the paper's Fig. 1 "
-                                   "for one robot, the whole map with every agent for a multi-agent run");
-  app.add_option("--svg-every", svg_every_text, "Cycles between frames")->capture_default_str();
-  app.add_flag("--quiet", quiet, "No progress on stderr (the summary line on stdout remains)");
+  app.add_flag("--quiet", a.quiet, "No progress on stderr (the summary line on stdout remains)");
+}
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "staa-sim: " << e.what() << " (see staa-sim --help)\n";
-    return kExitBadInput;
-  }
-
-  Request rq;
-  rq.quiet = quiet;
-
-  // What is not implemented yet is refused by name before anything is loaded.
-  if (controller != "staa" && controller != "dwa" && controller != "pd") {
-    throw InputError("--controller: expected staa, dwa or pd, got '" + controller + "'");
-  }
-  rq.controller = controller;
-  if (mode != "cooperative" && mode != "ghost") {
-    throw InputError("--mode: expected cooperative or ghost, got '" + mode + "'");
-  }
-  rq.mode = mode;
-  rq.agents = static_cast<int>(parseCount("--agents", agents_text, 1, 1000, "a number of agents"));
-  const bool multi = rq.agents > 1 || mode == "ghost";
-  if (!staa::parseHeuristicKind(heuristic_text.c_str(), rq.heuristic)) {
-    throw InputError("--heuristic: expected path-rtr, path-euclid or dijkstra-rtr, got '" + heuristic_text + "'");
-  }
-
-  staa::SimOptions& o = rq.options;
-  o.duration_s = parsePositive("--duration", duration_text, "simulated seconds");
-  o.rate_hz = parsePositive("--rate", rate_text, "a control rate in Hz");
-  if (o.duration_s * o.rate_hz > 1e8) {
-    throw InputError("--duration " + duration_text + " at --rate " + rate_text + " is more than 1e8 cycles");
-  }
-  rq.seed = parseCount("--seed", seed_text, 0, std::numeric_limits<std::uint64_t>::max(), "a seed");
-  if (!budget_ms_text.empty() && !budget_exp_text.empty()) {
-    throw InputError("--budget-ms " + budget_ms_text + " and --budget-expansions " + budget_exp_text +
-                     " exclude each other: give a wall-clock budget or an expansion budget, not both");
-  }
-  if (!budget_exp_text.empty()) {
-    o.budget = staa::BudgetSpec::expansionsOf(static_cast<std::uint32_t>(parseCount(
-        "--budget-expansions", budget_exp_text, 1, std::numeric_limits<std::uint32_t>::max(), "queue pops per cycle")));
-  } else if (!budget_ms_text.empty()) {
-    o.budget = staa::BudgetSpec::wallClockMs(parsePositive("--budget-ms", budget_ms_text, "milliseconds per cycle"));
-  } else {
-    o.budget = staa::BudgetSpec::defaultWallClock(o.rate_hz);
-  }
-  o.svg_every = static_cast<int>(parseCount("--svg-every", svg_every_text, 1, 1'000'000, "cycles between frames"));
-  o.svg_dir = svg_dir;
-  o.control.rate_hz = o.rate_hz;
-  o.control.staa.heuristic.kind = rq.heuristic;
-  rq.json_file = json_file;
-
-  if (multi) {
-    std::string why = rq.agents > 1 ? "--agents " : "--mode ghost";
-    if (rq.agents > 1) why.append(agents_text);
-    for (const auto& [name, text] : {std::pair<const char*, const std::string&>{"--scenario", scenario_file},
-                                     {"--start", start_text},
-                                     {"--goal", goal_text}}) {
+// What the options mean together, before anything is loaded.
+void validate(const Args& a) {
+  staa::cli::checkCycles(a.duration_option, a.rate_option, a.duration_s, a.rate_hz);
+  if (a.multi()) {
+    const std::string why = a.agents > 1 ? "--agents " + std::to_string(a.agents) : "--mode ghost";
+    for (const auto& [name, text] : {std::pair<const char*, const std::string&>{"--scenario", a.scenario_file},
+                                     {"--start", a.start_text},
+                                     {"--goal", a.goal_text}}) {
       if (!text.empty()) {
         throw InputError(std::string(name) + " '" + text + "' cannot be combined with " + why +
                          ": in a multi-agent run every agent drives to random goals of --map (--start, --goal "
                          "and --scenario are for a single robot)");
       }
     }
-    if (map_file.empty()) throw InputError("--map is required with " + why + " (the agents drive between its goals)");
-    MultiRequest mr;
-    mr.quiet = quiet;
-    mr.controller = rq.controller;
-    mr.mode = rq.mode;
-    mr.seed = rq.seed;
-    mr.heuristic = rq.heuristic;
-    mr.json_file = json_file;
-    mr.svg_dir = svg_dir;
-    mr.svg_every = o.svg_every;
-    staa::MultiSimOptions& m = mr.options;
-    m.agents = rq.agents;
-    staa::parseSimMode(mode, m.mode);
-    staa::parseControllerKind(controller, m.controller);
-    m.duration_s = o.duration_s;
-    m.rate_hz = o.rate_hz;
-    m.budget = o.budget;
-    m.seed = rq.seed;
-    m.control = o.control;
-    mr.robot = robot_file.empty() ? staa::paperAgentProfile() : staa::loadRobotProfile(robot_file);
-    loadMultiMap(mr, map_file, agents_text);
-    return simulateMulti(mr);
-  }
-
-  if (!scenario_file.empty()) {
-    for (const auto& [name, text] : {std::pair<const char*, const std::string&>{"--map", map_file},
-                                     {"--start", start_text},
-                                     {"--goal", goal_text}}) {
-      if (!text.empty()) {
-        throw InputError(std::string(name) + " '" + text + "' cannot be combined with --scenario " + scenario_file +
-                         " (the scenario names its map, start and goal)");
-      }
-    }
-    rq.scenario = staa::loadScenario(scenario_file);
-    rq.scenario_file = scenario_file;
-    rq.map_label = rq.scenario.map_path.string();
-    if (!robot_file.empty()) {
-      rq.scenario.robot = staa::loadRobotProfile(robot_file);
-      rq.scenario.profile_path = robot_file;
-      checkStart(rq.scenario, "--robot " + robot_file + ": the scenario's start");
-    }
-  } else {
-    if (map_file.empty()) throw InputError("--map or --scenario is required (see staa-sim --help)");
-    if (start_text.empty() || goal_text.empty()) {
-      throw InputError(std::string(start_text.empty() ? "--start" : "--goal") +
+    if (a.map_file.empty()) throw InputError("--map is required with " + why + " (the agents drive between its goals)");
+  } else if (a.scenario_file.empty()) {
+    if (a.map_file.empty()) throw InputError("--map or --scenario is required (see staa-sim --help)");
+    if (a.start_text.empty() || a.goal_text.empty()) {
+      throw InputError(std::string(a.start_text.empty() ? "--start" : "--goal") +
                        " is required with --map (a single robot drives from --start X,Y,TH to --goal X,Y,TH)");
     }
-    staa::Scenario& sc = rq.scenario;
-    sc.start = parsePose("--start", start_text);
-    sc.goal = parsePose("--goal", goal_text);
-    sc.map = staa::loadPolygonMap(map_file);
-    sc.map_path = map_file;
-    sc.name = sc.map.name.empty() ? fs::path(map_file).stem().string() : sc.map.name;
-    if (robot_file.empty()) {
-      sc.robot = staa::paperAgentProfile();
-    } else {
-      sc.robot = staa::loadRobotProfile(robot_file);
-      sc.profile_path = robot_file;
-    }
-    rq.map_label = map_file;
-    checkStart(sc, "--start");
-    checkGoal(sc, "--goal");
   }
+}
+
+staa::SimOptions simOptions(const Args& a) {
+  staa::SimOptions o;
+  o.duration_s = a.duration_s;
+  o.rate_hz = a.rate_hz;
+  o.budget = a.budget->spec(a.rate_hz);
+  o.svg_every = a.svg_every;
+  o.svg_dir = a.svg_dir;
+  o.control.rate_hz = a.rate_hz;
+  o.control.staa.heuristic.kind = a.heuristic;
+  return o;
+}
+
+Pose2 pose(const std::string& checked_text) {
+  const auto p = staa::cli::parsePoint<3>(checked_text).value();
+  return Pose2{p[0], p[1], p[2]};
+}
+
+// --scenario, with --robot in place of the scenario's profile.
+void loadScenarioRun(Request& rq, const Args& a) {
+  rq.scenario = staa::loadScenario(a.scenario_file);
+  rq.scenario_file = a.scenario_file;
+  rq.map_label = rq.scenario.map_path.string();
+  if (!a.robot_file.empty()) {
+    rq.scenario.robot = staa::loadRobotProfile(a.robot_file);
+    rq.scenario.profile_path = a.robot_file;
+    checkStart(rq.scenario, "--robot " + a.robot_file + ": the scenario's start");
+  }
+}
+
+// --map from --start to --goal, the paper's agent unless --robot.
+void loadMapRun(Request& rq, const Args& a) {
+  staa::Scenario& sc = rq.scenario;
+  sc.start = pose(a.start_text);
+  sc.goal = pose(a.goal_text);
+  sc.map = staa::loadPolygonMap(a.map_file);
+  sc.map_path = a.map_file;
+  sc.name = sc.map.name.empty() ? fs::path(a.map_file).stem().string() : sc.map.name;
+  if (a.robot_file.empty()) {
+    sc.robot = staa::paperAgentProfile();
+  } else {
+    sc.robot = staa::loadRobotProfile(a.robot_file);
+    sc.profile_path = a.robot_file;
+  }
+  rq.map_label = a.map_file;
+  checkStart(sc, "--start");
+  checkGoal(sc, "--goal");
+}
+
+Request singleRequest(const Args& a) {
+  Request rq;
+  rq.controller = a.controller;
+  rq.mode = a.mode;
+  rq.agents = a.agents;
+  rq.seed = a.seed;
+  rq.heuristic = a.heuristic;
+  rq.options = simOptions(a);
+  rq.json_file = a.json_file;
+  rq.quiet = a.quiet;
+  if (a.scenario_file.empty()) {
+    loadMapRun(rq, a);
+  } else {
+    loadScenarioRun(rq, a);
+  }
+  return rq;
+}
+
+MultiRequest multiRequest(const Args& a) {
+  MultiRequest rq;
+  rq.quiet = a.quiet;
+  rq.heuristic = a.heuristic;
+  rq.json_file = a.json_file;
+  rq.svg_dir = a.svg_dir;
+  rq.svg_every = a.svg_every;
+  staa::MultiSimOptions& m = rq.options;
+  m.agents = a.agents;
+  m.mode = a.mode;
+  m.controller = a.controller;
+  m.duration_s = a.duration_s;
+  m.rate_hz = a.rate_hz;
+  m.budget = a.budget->spec(a.rate_hz);
+  m.seed = a.seed;
+  m.control = simOptions(a).control;
+  rq.robot = a.robot_file.empty() ? staa::paperAgentProfile() : staa::loadRobotProfile(a.robot_file);
+  loadMultiMap(rq, a.map_file);
+  return rq;
+}
+
+int run(int argc, char** argv) {
+  if (argc > 1 && std::string_view(argv[1]) == "experiment") {
+    return staa::runExperimentCommand(argc - 1, argv + 1);
+  }
+  staa::cli::CommandLine cl("staa-sim",
+                            "staa-sim: run the STAA* control cycle against a simulated world: one robot from --start "
+                            "to --goal in a polygon map, or a scenario among scripted movers. Exit 0 on a completed "
+                            "run (reached or not), 2 on bad input.");
+  Args args;
+  addOptions(cl, args);
+  if (const auto exit = cl.parse(argc, argv)) return *exit;
+  validate(args);
+  if (args.multi()) {
+    MultiRequest rq = multiRequest(args);
+    return simulateMulti(rq);
+  }
+  Request rq = singleRequest(args);
   return simulate(rq);
 }
 
