@@ -1,7 +1,7 @@
 // Replacement global operator new/delete (every form: plain, array, nothrow, aligned, sized)
-// that count the allocations made by threads marked real-time (rt/alloc_count.hpp). Linked
-// into staad and its tests only (target staa_rt_alloc_hook, an object library so that the
-// linker cannot leave it out). Memory comes from malloc/aligned_alloc and goes back to free,
+// that count every allocation, per thread and for threads marked real-time
+// (rt/alloc_count.hpp). Linked into staad and the tests that count allocations (target
+// staa_rt_alloc_hook, an object library so that the linker cannot leave it out). Memory comes from malloc/aligned_alloc and goes back to free,
 // which keeps it correct under AddressSanitizer (it sees matching malloc/free pairs).
 
 #include "rt/alloc_count.hpp"
@@ -12,9 +12,7 @@
 
 namespace {
 
-void countIfRealtime() {
-  if (staa::rt::isRealtimeThread()) staa::rt::noteAllocation();
-}
+void count() { staa::rt::noteAllocation(); }
 
 // operator new's contract: retry through the new-handler until it succeeds or there is none.
 void* allocate(std::size_t size) {
@@ -50,15 +48,15 @@ const InstallNote g_install_note;
 }  // namespace
 
 void* operator new(std::size_t size) {
-  countIfRealtime();
+  count();
   return allocate(size);
 }
 void* operator new[](std::size_t size) {
-  countIfRealtime();
+  count();
   return allocate(size);
 }
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  countIfRealtime();
+  count();
   try {
     return allocate(size);
   } catch (...) {
@@ -66,7 +64,7 @@ void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   }
 }
 void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
-  countIfRealtime();
+  count();
   try {
     return allocate(size);
   } catch (...) {
@@ -74,15 +72,15 @@ void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
   }
 }
 void* operator new(std::size_t size, std::align_val_t align) {
-  countIfRealtime();
+  count();
   return allocateAligned(size, align);
 }
 void* operator new[](std::size_t size, std::align_val_t align) {
-  countIfRealtime();
+  count();
   return allocateAligned(size, align);
 }
 void* operator new(std::size_t size, std::align_val_t align, const std::nothrow_t&) noexcept {
-  countIfRealtime();
+  count();
   try {
     return allocateAligned(size, align);
   } catch (...) {
@@ -90,7 +88,7 @@ void* operator new(std::size_t size, std::align_val_t align, const std::nothrow_
   }
 }
 void* operator new[](std::size_t size, std::align_val_t align, const std::nothrow_t&) noexcept {
-  countIfRealtime();
+  count();
   try {
     return allocateAligned(size, align);
   } catch (...) {

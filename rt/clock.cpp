@@ -18,6 +18,13 @@ timespec toTimespec(Nanos t) {
   return ts;
 }
 
+Nanos monotonicNow() {
+  timespec ts{};
+  // CLOCK_MONOTONIC cannot fail with a valid pointer; the result is not checked.
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
+}
+
 }  // namespace
 
 Nanos threadCpuTime() {
@@ -26,12 +33,9 @@ Nanos threadCpuTime() {
   return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
 }
 
-Nanos MonotonicClock::now() const {
-  timespec ts{};
-  // CLOCK_MONOTONIC cannot fail with a valid pointer; the result is not checked.
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
-}
+Nanos MonotonicClock::now() const { return monotonicNow(); }
+
+Clock::NowFunction MonotonicClock::nowFunction() const { return &monotonicNow; }
 
 int MonotonicClock::sleepUntil(Nanos deadline) {
   const timespec ts = toTimespec(deadline);

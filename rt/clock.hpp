@@ -13,23 +13,33 @@ using Nanos = std::int64_t;  // nanoseconds on CLOCK_MONOTONIC (or a test's time
 constexpr Nanos kNanosPerMilli = 1'000'000;
 constexpr Nanos kNanosPerSecond = 1'000'000'000;
 
+// CPU time consumed by the calling thread so far (CLOCK_THREAD_CPUTIME_ID), -1 if unavailable.
+Nanos threadCpuTime();
+
 class Clock {
  public:
+  // The clock read through a plain function pointer (path/deadline.hpp's ClockFn is one).
+  using NowFunction = Nanos (*)();
+
   virtual ~Clock() = default;
   virtual Nanos now() const = 0;
   // Blocks until now() >= deadline (absolute). Returns 0, or the error code of the sleep
   // (clock_nanosleep returns it; it does not set errno). EINTR is retried inside.
   virtual int sleepUntil(Nanos deadline) = 0;
+  // The CPU time the calling thread has used, on this clock's terms; -1 when it has none (a
+  // test's time line, where a body's execution is only what the test advanced).
+  virtual Nanos threadCpuTime() const { return -1; }
+  // now() as a plain function, or nullptr when the clock lives in an object (a test's).
+  virtual NowFunction nowFunction() const { return nullptr; }
 };
-
-// CPU time consumed by the calling thread so far (CLOCK_THREAD_CPUTIME_ID), -1 if unavailable.
-Nanos threadCpuTime();
 
 // CLOCK_MONOTONIC; sleepUntil = clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME).
 class MonotonicClock final : public Clock {
  public:
   Nanos now() const override;
   int sleepUntil(Nanos deadline) override;
+  Nanos threadCpuTime() const override { return rt::threadCpuTime(); }
+  NowFunction nowFunction() const override;
 };
 
 // A test's clock: now() is what the test set; sleepUntil(d) jumps time to d when d is later

@@ -1,5 +1,7 @@
 #include "rt/realtime.hpp"
 
+#include "rt/errors.hpp"
+
 #include <alloca.h>
 #include <algorithm>
 #include <cerrno>
@@ -13,6 +15,7 @@
 #include <malloc.h>
 #include <mutex>
 #include <optional>
+#include <pthread.h>
 #include <sched.h>
 #include <stdexcept>
 #include <sys/mman.h>
@@ -44,17 +47,6 @@ constexpr unsigned kCapIpcLockBit = 14;   // linux/capability.h: CAP_IPC_LOCK
 std::size_t pageSize() {
   const long p = ::sysconf(_SC_PAGESIZE);
   return p > 0 ? static_cast<std::size_t>(p) : 4096;
-}
-
-// "Operation not permitted (EPERM)": the text for people, the name for searching.
-std::string describeErrno(int code) {
-  std::string out = std::error_code(code, std::generic_category()).message();
-  if (const char* name = ::strerrorname_np(code)) {
-    out += " (";
-    out += name;
-    out += ')';
-  }
-  return out;
 }
 
 // Bytes of the calling thread's stack below this frame that may be touched, or nullopt when
@@ -263,6 +255,12 @@ MemoryReport lockMemory(std::size_t heap_bytes, std::size_t stack_bytes) {
   return report;
 }
 
+struct RtThread::Native {
+  pthread_t thread{};
+};
+
+RtThread::RtThread() : native_(std::make_unique<Native>()) {}
+
 RtThread::~RtThread() {
   try {
     join();
@@ -324,7 +322,7 @@ void RtThread::start(const ThreadSpec& spec, std::function<void()> body) {
     Attr attr(who);
     refused = configure(attr, want_fifo);
     if (refused == 0) {
-      rc = ::pthread_create(&thread_, attr.get(), &RtThread::trampoline, &startup);
+      rc = ::pthread_create(&native_->thread, attr.get(), &RtThread::trampoline, &startup);
       if (want_fifo && (rc == EPERM || rc == EINVAL)) {
         refused = rc;  // no CAP_SYS_NICE / RLIMIT_RTPRIO, or no real-time runtime in this cgroup
       }
@@ -335,7 +333,7 @@ void RtThread::start(const ThreadSpec& spec, std::function<void()> body) {
                                describeErrno(refused) + "); running with normal scheduling");
     Attr attr(who);
     configure(attr, false);
-    rc = ::pthread_create(&thread_, attr.get(), &RtThread::trampoline, &startup);
+    rc = ::pthread_create(&native_->thread, attr.get(), &RtThread::trampoline, &startup);
   }
   if (rc != 0) {
     body_ = nullptr;
@@ -355,10 +353,10 @@ void RtThread::start(const ThreadSpec& spec, std::function<void()> body) {
 
 void RtThread::join() {
   if (!started_) return;
-  if (::pthread_equal(thread_, ::pthread_self()) != 0) {
+  if (::pthread_equal(native_->thread, ::pthread_self()) != 0) {
     throw std::system_error(EDEADLK, std::generic_category(), "RtThread: join() from the thread itself");
   }
-  if (const int rc = ::pthread_join(thread_, nullptr); rc != 0) {
+  if (const int rc = ::pthread_join(native_->thread, nullptr); rc != 0) {
     throw std::system_error(rc, std::generic_category(), "RtThread: pthread_join");
   }
   started_ = false;

@@ -1,15 +1,14 @@
 #pragma once
 // Real-time set-up of the process and its threads (ARCHITECTURE.md section 3), in the order
 // the daemon calls it: (1) config loaded and every workspace created, (2) lockMemory(),
-// (3) threads started with startThread(), (4) READY=1. Every pthread_* return code is
-// checked as a return value (they do not set errno).
+// (3) threads started (RtThread, or a PeriodicActivity that owns one), (4) READY=1. Every
+// pthread_* return code is checked as a return value (they do not set errno).
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <string>
-#include <thread>
 #include <vector>
-#include <pthread.h>
 
 namespace staa::rt {
 
@@ -38,7 +37,7 @@ struct ThreadSpec {
 // std::system_error naming the thread and the call.
 class RtThread {
  public:
-  RtThread() = default;
+  RtThread();
   RtThread(const RtThread&) = delete;
   RtThread& operator=(const RtThread&) = delete;
   ~RtThread();  // joins
@@ -51,8 +50,9 @@ class RtThread {
   const std::string& warning() const { return warning_; }
 
  private:
+  struct Native;  // the pthread_t, kept out of this header
   static void* trampoline(void* self);
-  pthread_t thread_{};
+  std::unique_ptr<Native> native_;
   bool started_ = false;
   bool realtime_ = false;
   bool pinned_ = false;

@@ -9,8 +9,11 @@
 #include <limits>
 #include <stdexcept>
 #include <system_error>
-#include <unistd.h>
 #include <utility>
+
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 namespace staa::rt {
 
@@ -60,6 +63,11 @@ std::optional<std::uint64_t> positiveFromEnv(const char* name, std::uint64_t max
 
 }  // namespace
 
+struct Notifier::Address {
+  sockaddr_un addr{};
+  socklen_t len = 0;
+};
+
 Notifier Notifier::fromEnvironment() {
   const char* raw = std::getenv("NOTIFY_SOCKET");
   if (raw == nullptr || *raw == '\0') return Notifier("");
@@ -75,17 +83,19 @@ Notifier::Notifier(std::string_view address) {
   if (const char* problem = addressProblem(address); *problem != '\0') {
     throw std::runtime_error("notify socket address " + quoted(address) + ": " + problem);
   }
-  addr_.sun_family = AF_UNIX;
+  addr_ = std::make_unique<Address>();
+  sockaddr_un& addr = addr_->addr;
+  addr.sun_family = AF_UNIX;
   if (address.front() == '@') {
     // Abstract namespace: a leading NUL, then the name; the length counts exactly the name's
     // bytes (no terminator), as the kernel compares all addr_len bytes.
-    addr_.sun_path[0] = '\0';
-    std::memcpy(addr_.sun_path + 1, address.data() + 1, address.size() - 1);
-    addr_len_ = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + address.size());
+    addr.sun_path[0] = '\0';
+    std::memcpy(addr.sun_path + 1, address.data() + 1, address.size() - 1);
+    addr_->len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + address.size());
   } else {
-    std::memcpy(addr_.sun_path, address.data(), address.size());
-    addr_.sun_path[address.size()] = '\0';
-    addr_len_ = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + address.size() + 1);
+    std::memcpy(addr.sun_path, address.data(), address.size());
+    addr.sun_path[address.size()] = '\0';
+    addr_->len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + address.size() + 1);
   }
   fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd_ < 0) {
@@ -95,14 +105,13 @@ Notifier::Notifier(std::string_view address) {
 }
 
 Notifier::Notifier(Notifier&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), addr_(other.addr_), addr_len_(std::exchange(other.addr_len_, 0)) {}
+    : fd_(std::exchange(other.fd_, -1)), addr_(std::move(other.addr_)) {}
 
 Notifier& Notifier::operator=(Notifier&& other) noexcept {
   if (this != &other) {
     if (fd_ >= 0) ::close(fd_);
     fd_ = std::exchange(other.fd_, -1);
-    addr_ = other.addr_;
-    addr_len_ = std::exchange(other.addr_len_, 0);
+    addr_ = std::move(other.addr_);
   }
   return *this;
 }
@@ -118,7 +127,7 @@ int Notifier::send(std::string_view message) const {
     // a receiver that does not read (its queue full after ~10 datagrams) must not block the
     // service thread; the message is dropped and EAGAIN returned.
     const ssize_t n = ::sendto(fd_, message.data(), message.size(), MSG_NOSIGNAL | MSG_DONTWAIT,
-                               reinterpret_cast<const sockaddr*>(&addr_), addr_len_);
+                               reinterpret_cast<const sockaddr*>(&addr_->addr), addr_->len);
     if (n >= 0) return 0;
     if (errno != EINTR) return errno;
   }

@@ -7,11 +7,10 @@
 
 #include "rt/clock.hpp"
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
-#include <sys/socket.h>
-#include <sys/un.h>
 
 namespace staa::rt {
 
@@ -41,9 +40,9 @@ class Notifier {
   static std::optional<Nanos> watchdogInterval();
 
  private:
+  struct Address;  // the sockaddr_un, kept out of this header
   int fd_ = -1;
-  sockaddr_un addr_{};
-  socklen_t addr_len_ = 0;
+  std::unique_ptr<Address> addr_;
 };
 
 }  // namespace staa::rt

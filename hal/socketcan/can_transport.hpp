@@ -11,6 +11,7 @@
 // Opening throws CanTransportError naming the interface; receive()/send() never allocate,
 // lock or block, and report what happened as a CanIo code.
 
+#include "hal/socketcan/socketcan.hpp"
 #include "rt/clock.hpp"
 
 #include <linux/can.h>
@@ -24,11 +25,6 @@
 namespace staa::hal {
 
 struct CanProfile;
-
-class CanTransportError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 enum class CanIo : std::uint8_t {
   kOk,          // one frame received / sent

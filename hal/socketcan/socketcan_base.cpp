@@ -1,9 +1,12 @@
 #include "hal/socketcan/socketcan_base.hpp"
 
+#include "hal/socketcan/socketcan.hpp"
+
 #include "geometry/types.hpp"
 
 #include <cmath>
 #include <ctime>
+#include <memory>
 #include <utility>
 
 namespace staa::hal {
@@ -300,6 +303,11 @@ bool SocketCanBase::sendFrame(const can_frame& frame) {
   ++counters_.write_failures;
   write_failed_ = true;
   return false;
+}
+
+std::unique_ptr<Base> openSocketCanBase(const std::string& interface, const CanProfile& profile,
+                                        const Pose2& start, const rt::Clock* clock) {
+  return std::make_unique<SocketCanBase>(openCanTransport(interface, profile), profile, start, clock);
 }
 
 }  // namespace staa::hal

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace staa {
 
@@ -20,10 +22,19 @@ const char* toString(CycleState state) {
 GlobalPathOptions ControlCycle::pathOptions(const ControlConfig& config, double inflation) {
   GlobalPathOptions o = config.path;
   o.inflation_radius_m = inflation;
+  o.search.max_dynamic_polygons = config.max_moving_obstacles;
+  o.search.max_dynamic_vertices = config.max_moving_obstacles * FixedPolygon::kCapacity;
   return o;
 }
 
 namespace {
+const ControlConfig& checked(const ControlConfig& config) {
+  if (config.max_moving_obstacles < 1 || config.max_moving_obstacles > kMaxMovingObstacleCapacity) {
+    throw std::invalid_argument("max_moving_obstacles must be 1.." + std::to_string(kMaxMovingObstacleCapacity) +
+                                ", got " + std::to_string(config.max_moving_obstacles));
+  }
+  return config;
+}
 constexpr std::size_t kHeldPathCapacity = 4096;
 double inflationFor(const ControlConfig& config, const RobotProfile& robot) {
   return config.inflation_m > 0.0 ? config.inflation_m : robot.circumradius();
@@ -43,7 +54,7 @@ StaaConfig staaFor(StaaConfig c, double inflation, double dynamic_inflation, dou
 }  // namespace
 
 ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, const ControlConfig& config)
-    : config_(config),
+    : config_(checked(config)),
       robot_(robot),
       inflation_(inflationFor(config, robot)),
       dynamic_inflation_(dynamicInflationFor(config, robot)),
@@ -53,8 +64,10 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
                                            config.path.arc_tolerance_m)),
       local_(config.local),
       staa_(staaFor(config.staa, inflation_, dynamic_inflation_, local_inflation_ + config.path.arc_tolerance_m), robot,
-            local_obstacles_, config.local),
-      empty_obstacles_(1) {
+            local_obstacles_, config.local, config.max_moving_obstacles),
+      empty_obstacles_(1),
+      inflated_(config.max_moving_obstacles),
+      views_(config.max_moving_obstacles) {
   held_path_.reserve(kHeldPathCapacity);
 }
 
@@ -130,6 +143,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   // 1. Global path, around the inflated moving obstacles where possible.
   std::int64_t t0 = steadyClockNs();
   const std::size_t n = std::min(obstacles.size(), views_.size());
+  out.obstacles_dropped = obstacles.dropped() + (obstacles.size() - n);
   for (std::size_t i = 0; i < n; ++i) {
     obstacles.predictInflated(i, 0.0, dynamic_inflation_, config_.staa.heuristic.arc_steps, inflated_[i]);
     views_[i] = inflated_[i].view();

@@ -24,6 +24,8 @@
 
 namespace staa {
 
+inline constexpr std::size_t kMaxMovingObstacleCapacity = 1024;
+
 enum class CycleState : std::uint8_t {
   kIdle,         // no goal
   kDriving,      // on the way
@@ -55,7 +57,11 @@ struct ControlConfig {
   StaaConfig staa;
   LocalMapConfig local;
   GlobalPathOptions path;
-  std::size_t max_dynamic_obstacles = 32;
+  // The moving-obstacle capacity: the most moving obstacles the cycle plans against. Every
+  // buffer of the cycle is sized by it, and callers size their DynamicObstacleSet by it
+  // (ControlCycle::obstacleCapacity()); more in a set are counted (obstacles_dropped), not
+  // planned against. 1..kMaxMovingObstacleCapacity, checked at construction.
+  std::size_t max_moving_obstacles = kDefaultMovingObstacleCapacity;
   // When the path query fails while the robot drives (it squeezed into a gap narrower than
   // M' allows, or the cycle's time ran out on a cold query), the last path found is followed
   // for up to this long before the goal counts as unreachable.
@@ -80,6 +86,7 @@ struct CycleOutput {
   std::int64_t path_ns = 0;
   std::int64_t local_ns = 0;
   std::int64_t plan_ns = 0;
+  std::size_t obstacles_dropped = 0;  // moving obstacles beyond the capacity, not planned against
 };
 
 class ControlCycle {
@@ -101,6 +108,7 @@ class ControlCycle {
   void setLocalController(LocalController* controller) { baseline_ = controller; }
 
   const ControlConfig& config() const { return config_; }
+  std::size_t obstacleCapacity() const { return config_.max_moving_obstacles; }
   const RobotProfile& robot() const { return robot_; }
   double inflation() const { return inflation_; }
   double dynamicInflation() const { return dynamic_inflation_; }
@@ -124,8 +132,8 @@ class ControlCycle {
   DynamicObstacleSet empty_obstacles_;
   std::optional<Pose2> goal_;
   CycleState state_ = CycleState::kIdle;
-  std::array<FixedPolygon, 64> inflated_{};
-  std::array<PolygonView, 64> views_{};
+  std::vector<FixedPolygon> inflated_;  // D' for the global path, obstacleCapacity() each
+  std::vector<PolygonView> views_;
   std::span<const Vec2> last_path_;
   // The last path found, held for path_hold_s (capacity reserved at construction; a longer
   // path is not held), and how many cycles in a row the query has failed.

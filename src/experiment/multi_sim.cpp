@@ -207,7 +207,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   MultiWorld world(map, robot);
   std::vector<std::unique_ptr<SimAgent>> agents;
   agents.reserve(n);
-  const std::size_t capacity = std::max<std::size_t>(1, std::min(n, config.max_dynamic_obstacles));
+  // Every agent plans against all the others: the capacity is raised to them if it is lower.
+  config.max_moving_obstacles = std::max(config.max_moving_obstacles, n > 0 ? n - 1 : 0);
+  const std::size_t capacity = config.max_moving_obstacles;
   for (std::size_t i = 0; i < n; ++i) {
     auto a = std::make_unique<SimAgent>(capacity);
     a->evaluated = options.mode == SimMode::kCooperative || i == 0;

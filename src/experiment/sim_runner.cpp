@@ -26,7 +26,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   ControlCycle cycle(scenario.map, scenario.robot, options.control);
   cycle.setGoal(scenario.goal);
   cycle.setLocalController(options.controller);
-  DynamicObstacleSet obstacles(options.control.max_dynamic_obstacles);
+  DynamicObstacleSet obstacles(options.control.max_moving_obstacles);
   std::vector<Polygon> mover_polys(world.moverCount());
   std::vector<PolygonView> views(world.moverCount());
   std::vector<Vec2> velocities(world.moverCount());

@@ -21,6 +21,10 @@ struct FixedPolygon {
   Box box;
 };
 
+// How many moving obstacles a cycle plans against unless configured otherwise
+// (ControlConfig::max_moving_obstacles, the one number every buffer is sized by).
+inline constexpr std::size_t kDefaultMovingObstacleCapacity = 32;
+
 class DynamicObstacleSet {
  public:
   // An observed hull with more vertices is simplified (conservatively: it only grows) to this
@@ -28,7 +32,8 @@ class DynamicObstacleSet {
   // chord limit within FixedPolygon::kCapacity.
   static constexpr std::size_t kMaxHullVertices = 32;
 
-  explicit DynamicObstacleSet(std::size_t max_obstacles = 32);
+  explicit DynamicObstacleSet(std::size_t max_obstacles = kDefaultMovingObstacleCapacity);
+  std::size_t capacity() const { return obstacles_.size(); }
 
   // Sets the observed obstacles: each polygon is replaced by its convex hull (moving things
   // are compact; convexity allows SAT). A hull of more than kMaxHullVertices is simplified by

@@ -113,10 +113,18 @@ IntermediateGoal findIntermediateGoal(std::span<const Vec2, 4> box_ccw, std::spa
 
 // ---- construction ----
 
+GridSize boxGridSize(const LocalMapConfig& config, double cell_m) {
+  GridSize g;
+  g.width = std::max(1, ceilToInt((config.ahead_m + config.behind_m) / cell_m - 1e-9));
+  g.height = std::max(1, ceilToInt(2.0 * config.side_m / cell_m - 1e-9));
+  return g;
+}
+
 LocalMap::LocalMap(const LocalMapConfig& config) : config_(config) {
-  width_ = std::max(1, ceilToInt((config_.ahead_m + config_.behind_m) / config_.cell_m - 1e-9));
-  height_ = std::max(1, ceilToInt(2.0 * config_.side_m / config_.cell_m - 1e-9));
-  const std::size_t cells = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  const GridSize size = gridSize(config_);
+  width_ = size.width;
+  height_ = size.height;
+  const std::size_t cells = size.cells();
 
   const double dilate_cells = std::max(0.0, config_.dilate_m / config_.cell_m);
   dilate_cells_ = floorToInt(dilate_cells + 1e-9);
@@ -166,13 +174,7 @@ void LocalMap::update(const Pose2& robot, const PolygonSet& real, std::span<cons
   robot_ = robot;
   cos_ = std::cos(robot.theta);
   sin_ = std::sin(robot.theta);
-  const double inv = 1.0 / config_.cell_m;
-  gxx_ = cos_ * inv;
-  gxy_ = sin_ * inv;
-  gx0_ = (config_.behind_m - cos_ * robot.x - sin_ * robot.y) * inv;
-  gyx_ = -sin_ * inv;
-  gyy_ = cos_ * inv;
-  gy0_ = (config_.side_m + sin_ * robot.x - cos_ * robot.y) * inv;
+  frame_ = frameAt(config_.cell_m);
 
   const auto toWorld = [&](double lx, double ly) {
     return Vec2{robot.x + cos_ * lx - sin_ * ly, robot.y + sin_ * lx + cos_ * ly};
@@ -212,7 +214,7 @@ void LocalMap::drawObstacles(const PolygonSet& real, const Box& box_aabb) {
     double ylo = std::numeric_limits<double>::infinity(), yhi = -ylo;
     for (std::size_t v = 0; v < n; ++v) {
       convex = convex && orientSign(poly[(v + n - 1) % n], poly[v], poly[(v + 1) % n]) >= 0;
-      const double gy = gyx_ * poly[v].x() + gyy_ * poly[v].y() + gy0_;
+      const double gy = frame_.gridY(poly[v].x(), poly[v].y());
       ylo = std::min(ylo, gy);
       yhi = std::max(yhi, gy);
     }
@@ -398,6 +400,25 @@ void LocalMap::buildCostmap() {
 bool LocalMap::inBox(const Vec2& world) const {
   const Vec2 g = toGrid(world);
   return g.x() >= 0.0 && g.x() <= width_ && g.y() >= 0.0 && g.y() <= height_;
+}
+
+GridFrame LocalMap::frameAt(double cell_m) const {
+  // World -> the box's frame (rear-right corner at the origin) -> cells.
+  const double inv = 1.0 / cell_m;
+  GridFrame f;
+  f.xx = cos_ * inv;
+  f.xy = sin_ * inv;
+  f.x0 = (config_.behind_m - cos_ * robot_.x - sin_ * robot_.y) * inv;
+  f.yx = -sin_ * inv;
+  f.yy = cos_ * inv;
+  f.y0 = (config_.side_m + sin_ * robot_.x - cos_ * robot_.y) * inv;
+  return f;
+}
+
+void LocalMap::nearestCell(const Vec2& world, int& i, int& j) const {
+  const Vec2 g = toGrid(world);
+  i = std::clamp(floorToInt(g.x()), 0, width_ - 1);
+  j = std::clamp(floorToInt(g.y()), 0, height_ - 1);
 }
 
 bool LocalMap::cellOf(const Vec2& world, int& i, int& j) const {

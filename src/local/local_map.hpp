@@ -25,6 +25,27 @@ struct LocalMapConfig {
   double blur_sigma_m = 0.12; // C' : Gaussian blur (the paper's code: blur radius 0.24 m = 2 sigma)
 };
 
+// A grid over the local box for one robot pose: the affine map from world coordinates to
+// cell units (cell (i, j) covers [i, i+1) x [j, j+1); i along the robot's x from the rear
+// edge, j along its y from the right edge) at a resolution. The local map owns it: the
+// rasterizer, the collision checks, the heuristic and STAA*'s closed table use the same one.
+struct GridFrame {
+  double xx = 0.0, xy = 0.0, x0 = 0.0, yx = 0.0, yy = 0.0, y0 = 0.0;
+  double gridX(double x, double y) const { return xx * x + xy * y + x0; }
+  double gridY(double x, double y) const { return yx * x + yy * y + y0; }
+  Vec2 toGrid(const Vec2& w) const { return {gridX(w.x(), w.y()), gridY(w.x(), w.y())}; }
+};
+
+// Cells of a grid over the box at `cell_m`: along x (ahead + behind) and y (2 * side). The
+// one rounding rule for every grid over the box (a hair below a whole number of cells counts
+// as that number).
+struct GridSize {
+  int width = 0;
+  int height = 0;
+  std::size_t cells() const { return static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
+};
+GridSize boxGridSize(const LocalMapConfig& config, double cell_m);
+
 // The intermediate goal G~ (paper, Sec. III-C).
 struct IntermediateGoal {
   Pose2 pose;              // position, heading along the path (or the final goal's heading)
@@ -37,6 +58,9 @@ struct IntermediateGoal {
 class LocalMap {
  public:
   explicit LocalMap(const LocalMapConfig& config = {});
+  // The size of the local map's own grid for a config (what every user of the grid sizes
+  // its buffers by).
+  static GridSize gridSize(const LocalMapConfig& config) { return boxGridSize(config, config.cell_m); }
 
   const LocalMapConfig& config() const { return config_; }
   int width() const { return width_; }    // cells along x (ahead + behind)
@@ -66,8 +90,15 @@ class LocalMap {
   std::span<const float> costmap() const { return costmap_; }
   const IntermediateGoal& intermediateGoal() const { return goal_; }
 
-  // World <-> cell helpers (for drawing and tests). cellOf returns false outside the box.
+  // The grid's world -> cell map for this update, and the same box at another resolution
+  // (STAA*'s closed table).
+  const GridFrame& frame() const { return frame_; }
+  GridFrame frameAt(double cell_m) const;
+
+  // World <-> cell helpers (for drawing and tests). cellOf returns false outside the box;
+  // nearestCell clamps into the grid (a point a rounding error outside the box).
   bool cellOf(const Vec2& world, int& i, int& j) const;
+  void nearestCell(const Vec2& world, int& i, int& j) const;
   Vec2 cellCenter(int i, int j) const;
 
  private:
@@ -76,18 +107,14 @@ class LocalMap {
   void markEdgeCells(const Vec2& a, const Vec2& b);      // supercover of one edge
   void addEdgeCrossings(const Vec2& a, const Vec2& b, bool convex);  // at the row centres
   void buildCostmap();                                     // C' from grid_
-  // World -> grid coordinates (cell units, cell (i, j) covers [i, i+1) x [j, j+1)).
-  Vec2 toGrid(const Vec2& w) const {
-    return {gxx_ * w.x() + gxy_ * w.y() + gx0_, gyx_ * w.x() + gyy_ * w.y() + gy0_};
-  }
+  Vec2 toGrid(const Vec2& w) const { return frame_.toGrid(w); }
 
   LocalMapConfig config_;
   int width_ = 0;
   int height_ = 0;
   Pose2 robot_;
   double cos_ = 1.0, sin_ = 0.0;
-  // The affine world -> grid map of toGrid, precomputed per update from cos_/sin_.
-  double gxx_ = 0.0, gxy_ = 0.0, gx0_ = 0.0, gyx_ = 0.0, gyy_ = 0.0, gy0_ = 0.0;
+  GridFrame frame_;  // frameAt(cell_m), per update
   // Stored by value (a span member into our own storage would dangle after a copy).
   std::array<Vec2, 4> box_world_{};
   std::vector<std::uint8_t> grid_;

@@ -203,12 +203,16 @@ cl::Paths traceBlockedBoundaries(const OccupancyGrid& grid) {
   return rings;
 }
 
-double pointSegmentDistance(const cl::IntPoint& p, const cl::IntPoint& a, const cl::IntPoint& b) {
+// Squared: libm's hypot is not rounded alike on every platform (glibc uses fused
+// multiply-adds where the hardware has them), and a last-bit difference against the
+// tolerance keeps another vertex. Basic arithmetic rounds the same everywhere.
+double pointSegmentDistance2(const cl::IntPoint& p, const cl::IntPoint& a, const cl::IntPoint& b) {
   const double abx = static_cast<double>(b.X - a.X), aby = static_cast<double>(b.Y - a.Y);
   const double apx = static_cast<double>(p.X - a.X), apy = static_cast<double>(p.Y - a.Y);
   const double len2 = abx * abx + aby * aby;
   const double t = len2 > 0.0 ? std::clamp((apx * abx + apy * aby) / len2, 0.0, 1.0) : 0.0;
-  return std::hypot(apx - t * abx, apy - t * aby);
+  const double dx = apx - t * abx, dy = apy - t * aby;
+  return dx * dx + dy * dy;
 }
 
 // Douglas-Peucker on a closed ring, anchored at vertex 0 and the vertex farthest from it.
@@ -230,10 +234,10 @@ cl::Path douglasPeucker(const cl::Path& ring, double tolerance) {
   while (!stack.empty()) {
     const auto [a, b] = stack.back();
     stack.pop_back();
-    double worst = tolerance;
+    double worst = tolerance * tolerance;
     std::size_t worst_i = 0;
     for (std::size_t i = a + 1; i < b; ++i) {
-      const double d = pointSegmentDistance(ring[i], ring[a], ring[b % n]);
+      const double d = pointSegmentDistance2(ring[i], ring[a], ring[b % n]);
       if (d > worst) {
         worst = d;
         worst_i = i;

@@ -21,9 +21,7 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
     : footprint_(robot.footprint), cell_(local.cell_m) {
   const double cell_m = local.cell_m;
   // The distance field covers the local grid: sized here, once.
-  const auto w = static_cast<std::size_t>(std::lround((local.ahead_m + local.behind_m) / cell_m));
-  const auto h = static_cast<std::size_t>(std::lround(2.0 * local.side_m / cell_m));
-  distance_.assign(w * h, 0.0f);
+  distance_.assign(LocalMap::gridSize(local).cells(), 0.0f);
   if (!isCounterClockwise(footprint_)) std::reverse(footprint_.begin(), footprint_.end());
   if (footprint_.size() > placed_.size()) {
     throw std::invalid_argument("robot footprint has " + std::to_string(footprint_.size()) + " vertices; at most " +
@@ -111,21 +109,24 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
 void CollisionChecker::prepare(const LocalMap& map) {
   map_ = &map;
   // World -> grid cells: into the box's frame (origin at the robot, x ahead), shift so that
-  // the rear-right corner is (0, 0), divide by the cell size.
+  // the rear-right corner is (0, 0), divide by the cell size. Rounded as it always was here,
+  // not as LocalMap::frame() rounds: the two differ in the last bits, and unifying them
+  // changes expansion-budget runs (a change of its own, not of the re-layering).
   const Pose2& o = map.origin();
   const double c = std::cos(o.theta), sn = std::sin(o.theta), inv = 1.0 / map.config().cell_m;
-  gxx_ = c * inv;
-  gxy_ = sn * inv;
-  gx0_ = (-c * o.x - sn * o.y + map.config().behind_m) * inv;
-  gyx_ = -sn * inv;
-  gyy_ = c * inv;
-  gy0_ = (sn * o.x - c * o.y + map.config().side_m) * inv;
+  frame_.xx = c * inv;
+  frame_.xy = sn * inv;
+  frame_.x0 = (-c * o.x - sn * o.y + map.config().behind_m) * inv;
+  frame_.yx = -sn * inv;
+  frame_.yy = c * inv;
+  frame_.y0 = (sn * o.x - c * o.y + map.config().side_m) * inv;
   grid_ = map.grid().data();
   grid_w_ = map.width();
   grid_h_ = map.height();
-  if (distance_.size() != static_cast<std::size_t>(map.width()) * static_cast<std::size_t>(map.height())) {
-    // A local map of another size than configured: resize (allocates; never in a set-up cycle).
-    distance_.resize(static_cast<std::size_t>(map.width()) * static_cast<std::size_t>(map.height()));
+  if (distance_.size() != map.grid().size()) {
+    // A local map of another config than this checker's (not in a cycle set up from one
+    // config): resize, which allocates, rather than write past the field.
+    distance_.resize(map.grid().size());
   }
   conservativeDistanceField(map.grid(), map.width(), map.height(), cell_, distance_);
 }
@@ -136,8 +137,9 @@ bool CollisionChecker::poseFreeStatic(const Pose2& pose) const {
 
 bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) const {
   // Robot frame -> grid: the pose's rotation and translation composed with the grid's map.
-  const double ax = gxx_ * p.c + gxy_ * p.s, ay = -gxx_ * p.s + gxy_ * p.c;  // robot x, y axes in grid x
-  const double bx = gyx_ * p.c + gyy_ * p.s, by = -gyx_ * p.s + gyy_ * p.c;  // ... in grid y
+  const GridFrame& f = frame_;
+  const double ax = f.xx * p.c + f.xy * p.s, ay = -f.xx * p.s + f.xy * p.c;  // robot x, y axes in grid x
+  const double bx = f.yx * p.c + f.yy * p.s, by = -f.yx * p.s + f.yy * p.c;  // ... in grid y
   const double ox = gridX(p.x, p.y), oy = gridY(p.x, p.y);
   double margin = kFar;
   bool clear_all = true;

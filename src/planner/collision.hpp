@@ -80,9 +80,9 @@ class CollisionChecker {
 
  private:
   int samplesFor(const ArcVelocities& vel, double dt) const;
-  // Grid coordinates (cells) of a world point; the affine map is set per cycle in prepare().
-  double gridX(double x, double y) const { return gxx_ * x + gxy_ * y + gx0_; }
-  double gridY(double x, double y) const { return gyx_ * x + gyy_ * y + gy0_; }
+  // Grid coordinates (cells) of a world point: the local map's frame of this cycle.
+  double gridX(double x, double y) const { return frame_.gridX(x, y); }
+  double gridY(double x, double y) const { return frame_.gridY(x, y); }
   // Index of the cell at grid coordinates, or -1 outside the grid.
   std::ptrdiff_t cellIndex(double gx, double gy) const {
     if (!(gx >= 0.0 && gy >= 0.0 && gx < grid_w_ && gy < grid_h_)) return -1;
@@ -92,7 +92,7 @@ class CollisionChecker {
   const LocalMap* map_ = nullptr;
   const std::uint8_t* grid_ = nullptr;
   int grid_w_ = 0, grid_h_ = 0;
-  double gxx_ = 0.0, gxy_ = 0.0, gx0_ = 0.0, gyx_ = 0.0, gyy_ = 0.0, gy0_ = 0.0;
+  GridFrame frame_;
   Polygon footprint_;
   Polygon footprint_dynamic_;  // grown by dynamic_margin_ (mitred): checked against D(t)
   double dynamic_margin_ = 0.0;

@@ -66,8 +66,8 @@ double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta
 }
 
 Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, const std::vector<Polygon>& inflated_static,
-                     const LocalMapConfig& local)
-    : config_(config), limits_(limits) {
+                     const LocalMapConfig& local, std::size_t max_obstacles)
+    : config_(config), limits_(limits), inflated_(3 * max_obstacles), views_(max_obstacles) {
   config_.dynamic_depth = std::clamp(config_.dynamic_depth, 0, 3);
   MinimalConstruct::Options opt;
   opt.max_dynamic_polygons = views_.size();
@@ -78,9 +78,7 @@ Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, 
     mc = MinimalConstruct(opt);
     mc.setStaticObstacles(inflated_static);
   }
-  const int w = static_cast<int>(std::lround((local.ahead_m + local.behind_m) / local.cell_m));
-  const int h = static_cast<int>(std::lround(2.0 * local.side_m / local.cell_m));
-  const std::size_t cells = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  const std::size_t cells = LocalMap::gridSize(local).cells();
   if (config_.kind == HeuristicKind::kDijkstraRtr) {
     dijkstra_.assign(cells, 0.0f);
     dijkstra_dir_.assign(cells, 0.0f);
@@ -188,12 +186,8 @@ void Heuristic::buildDijkstra(const LocalMap& map, const CollisionChecker* clear
   std::fill(dijkstra_.begin(), dijkstra_.end(), inf);
   heap_.clear();
   int gi, gj;
-  if (!map.cellOf(goal_.position(), gi, gj)) {
-    // G~ on the box boundary can round to just outside: clamp into the grid.
-    const Vec2 local = map.origin().inverseTransform(goal_.position());
-    gi = std::clamp(static_cast<int>(std::floor((local.x() + map.config().behind_m) / map.config().cell_m)), 0, w - 1);
-    gj = std::clamp(static_cast<int>(std::floor((local.y() + map.config().side_m) / map.config().cell_m)), 0, h - 1);
-  }
+  // G~ on the box boundary can round to just outside: the nearest cell, clamped into the grid.
+  map.nearestCell(goal_.position(), gi, gj);
   const std::size_t start = static_cast<std::size_t>(gj) * static_cast<std::size_t>(w) + static_cast<std::size_t>(gi);
   dijkstra_[start] = 0.0f;
   dijkstra_dir_[start] = static_cast<float>(goal_.theta);

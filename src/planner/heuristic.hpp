@@ -55,9 +55,10 @@ double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta
 
 class Heuristic {
  public:
-  // `inflated_static` is M' (the path planner's inflated obstacles), indexed once here.
+  // `inflated_static` is M' (the path planner's inflated obstacles), indexed once here;
+  // `max_obstacles` the cycle's moving-obstacle capacity (D'(t) is sized by it).
   Heuristic(const HeuristicConfig& config, const MotionLimits& limits, const std::vector<Polygon>& inflated_static,
-            const LocalMapConfig& local);
+            const LocalMapConfig& local, std::size_t max_obstacles = kDefaultMovingObstacleCapacity);
 
   // Per cycle: the intermediate goal, the moving obstacles at the cycle's start, the step dt,
   // and (for Dijkstra RTR) the local map. No allocation. The path heuristics' Minimal
@@ -93,8 +94,8 @@ class Heuristic {
   MinimalConstruct static_search_;
   std::array<MinimalConstruct, 3> dynamic_search_;
   std::array<bool, 3> has_dynamic_{};
-  std::array<FixedPolygon, 3 * 32> inflated_{};
-  std::array<PolygonView, 32> views_{};
+  std::vector<FixedPolygon> inflated_;  // D'(t) at the three depths, max_obstacles each
+  std::vector<PolygonView> views_;
   std::span<const Vec2> last_path_;
   std::uint64_t queries_ = 0;
 

@@ -36,13 +36,13 @@ StaaConfig adaptedConfig(StaaConfig c, const MotionLimits& limits) {
 }  // namespace
 
 StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const std::vector<Polygon>& inflated_static,
-                   const LocalMapConfig& local)
+                   const LocalMapConfig& local, std::size_t max_obstacles)
     : config_(adaptedConfig(config, robot.limits)),
       limits_(robot.limits),
       actions_(robot.limits, config.notches),
       collision_(robot, local),
-      heuristic_(config.heuristic, robot.limits, inflated_static, local),
-      braking_obstacles_(64) {
+      heuristic_(config.heuristic, robot.limits, inflated_static, local, max_obstacles),
+      braking_obstacles_(max_obstacles) {
   braking_obstacles_.setBraking(config_.obstacle_reaction_s, config_.obstacle_brake_decel);
   root_ok_.assign(actions_.size(), 1);
   root_clear_.assign(actions_.size(), 0.0);
@@ -50,10 +50,11 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
   nodes_.reserve(config_.max_nodes);
   queue_.reserve(config_.max_nodes);
   trajectory_.reserve(config_.max_nodes > 1024 ? 1024 : config_.max_nodes);
-  closed_w_ = static_cast<int>(std::ceil((local.ahead_m + local.behind_m) / config_.closed_xy_m));
-  closed_h_ = static_cast<int>(std::ceil(2.0 * local.side_m / config_.closed_xy_m));
-  closed_t_ = static_cast<int>(std::ceil(2.0 * kPi / config_.closed_theta_rad));
   inv_closed_xy_ = 1.0 / config_.closed_xy_m;
+  const GridSize closed_size = boxGridSize(local, config_.closed_xy_m);
+  closed_w_ = closed_size.width;
+  closed_h_ = closed_size.height;
+  closed_t_ = static_cast<int>(std::ceil(2.0 * kPi / config_.closed_theta_rad));
   inv_two_pi_ = 1.0 / (2.0 * kPi);
   closed_.assign(static_cast<std::size_t>(closed_w_) * static_cast<std::size_t>(closed_h_) * static_cast<std::size_t>(closed_t_), 0);
 }

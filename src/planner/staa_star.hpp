@@ -117,8 +117,9 @@ Action brakeAction(const UnicycleState& s, const MotionLimits& limits, double dt
 
 class StaaStar {
  public:
+  // `max_obstacles`: the cycle's moving-obstacle capacity (ControlConfig::max_moving_obstacles).
   StaaStar(const StaaConfig& config, const RobotProfile& robot, const std::vector<Polygon>& inflated_static,
-           const LocalMapConfig& local);
+           const LocalMapConfig& local, std::size_t max_obstacles = kDefaultMovingObstacleCapacity);
 
   // Plans from `start` (in the local map's frame: world) to the local map's G~. The local map
   // must be updated for this cycle. `obstacles` holds D at the cycle's time (t = 0).
@@ -187,7 +188,8 @@ class StaaStar {
   std::uint32_t generation_ = 0;
   int closed_w_ = 0, closed_h_ = 0, closed_t_ = 0;
   double inv_closed_xy_ = 20.0, inv_two_pi_ = 0.0;
-  // This cycle's box (the closed table's frame).
+  // This cycle's box (the closed table's frame), rounded as it always was here (see
+  // CollisionChecker::prepare on why not LocalMap::frameAt).
   double box_x_ = 0.0, box_y_ = 0.0, box_c_ = 1.0, box_s_ = 0.0, box_behind_ = 0.0, box_side_ = 0.0;
   // Per expansion: for each angular acceleration, the end and mid angular velocities and the
   // cosine and sine of the rotation over dt.

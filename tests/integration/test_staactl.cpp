@@ -316,7 +316,7 @@ TEST_F(Staactl, StatusJsonPrintsTheStatusObject) {
   s.has_goal = true;
   s.goal = {12.0, 4.5, 1.57};
   s.cycles = 99;
-  s.cycle_p99_us = 4100.0;
+  s.control_thread.execution.p99_us = 4100.0;
   s.obstacles_age_s = 0.02;
   FakeStaad staad(socket_, {statusReply(s, 7)});
   const CtlRun r = ctl({"--socket", socket_.string(), "status", "--json"});
@@ -332,10 +332,10 @@ TEST_F(Staactl, StatusPrintsAHumanSummary) {
   s.fault = FaultKind::kStaleOdometry;
   s.pose = {1.5, 4.5, 0.25};
   s.cycles = 99;
-  s.cycle_p50_us = 800;
-  s.cycle_p99_us = 4100.0;
-  s.cycle_max_us = 9000;
-  s.overruns = 2;
+  s.control_thread.execution.p50_us = 800;
+  s.control_thread.execution.p99_us = 4100.0;
+  s.control_thread.execution.max_us = 9000;
+  s.control_thread.counters.overruns = 2;
   s.odometry_age_s = 0.35;
   FakeStaad staad(socket_, {statusReply(s, 7)});
   const CtlRun r = ctl({"--socket", socket_.string(), "status"});

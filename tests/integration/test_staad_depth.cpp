@@ -86,7 +86,7 @@ TEST_F(StaadDepth, DrivesToTheGoalOnRenderedDepthFrames) {
   ASSERT_TRUE(fs::exists(dir_ / "staad.sock"));
 
   const auto t0 = std::chrono::steady_clock::now();
-  const auto [code, out] = staactl({"goal", "10.5", "4.5", "0", "--wait", "--timeout", "12"}, std::chrono::seconds(15));
+  const auto [code, out] = staactl({"goal", "10.5", "4.5", "0", "--wait", "--timeout", "40"}, std::chrono::seconds(45));
   ASSERT_TRUE(code.has_value()) << "staactl did not return";
   EXPECT_EQ(*code, 0) << out << readFile(dir_ / "staactl.err");
   EXPECT_EQ(out, "ok (goal 1)\nreached\n");

@@ -16,6 +16,8 @@
 
 #include "app/cli_support.hpp"
 #include "app/staad/protocol.hpp"
+#include "rt/errors.hpp"
+#include "rt/unix_socket.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -27,20 +29,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <iostream>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
-#include <system_error>
 #include <thread>
-
-#include <fcntl.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <unistd.h>
 
 namespace {
 
@@ -65,8 +59,6 @@ class Failure : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-std::string errnoText(int error) { return std::system_category().message(error); }
-
 std::string inQuotes(std::string_view s) {
   std::string q = "'";  // appended: GCC 12 warns falsely (-Wrestrict) on "'" + s + "'"
   q.append(s).append("'");
@@ -75,104 +67,46 @@ std::string inQuotes(std::string_view s) {
 
 // ---- transport: one connection, one request line, one reply line, within a deadline ----
 
-class Connection {
- public:
-  Connection(const std::string& path, SteadyClock::time_point deadline) : path_(path), deadline_(deadline) {
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::memcpy(addr.sun_path, path.data(), path.size());  // length checked by the caller
-    // Non-blocking from the start: a daemon whose accept backlog is full, or that never
-    // answers, costs at most the deadline.
-    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-    if (fd_ < 0) throw Failure("socket(AF_UNIX): " + errnoText(errno));
-    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
-      const int error = errno;
-      if (error == EINPROGRESS) {
-        waitFor(POLLOUT, "connecting");
-        int so_error = 0;
-        socklen_t len = sizeof so_error;
-        if (::getsockopt(fd_, SOL_SOCKET, SO_ERROR, &so_error, &len) != 0) so_error = errno;
-        if (so_error != 0) cannotConnect(so_error);
-      } else {
-        cannotConnect(error);
-      }
+// What went wrong with the exchange, in staactl's words.
+Failure exchangeFailure(const staa::rt::SocketError& e, const std::string& path) {
+  using Kind = staa::rt::SocketError::Kind;
+  using Stage = staa::rt::SocketError::Stage;
+  switch (e.kind()) {
+    case Kind::kConnect: {
+      std::string msg = "cannot connect to " + path + ": " + staa::rt::errnoText(e.error());
+      if (e.error() == EAGAIN) msg += " (staad's connection queue is full)";
+      msg += " (is staad running? --socket or STAAD_SOCKET)";
+      return Failure(msg);
     }
-  }
-  ~Connection() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  Connection(const Connection&) = delete;
-  Connection& operator=(const Connection&) = delete;
-
-  void send(const std::string& line) {
-    std::size_t sent = 0;
-    while (sent < line.size()) {
-      // MSG_NOSIGNAL: a daemon that closed on us is an error message, not a SIGPIPE death.
-      const ssize_t n = ::send(fd_, line.data() + sent, line.size() - sent, MSG_NOSIGNAL);
-      if (n > 0) {
-        sent += static_cast<std::size_t>(n);
-      } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
-        waitFor(POLLOUT, "sending the request");
-      } else if (n < 0 && errno == EINTR) {
-        continue;
-      } else {
-        throw Failure("cannot send to " + path_ + ": " + errnoText(errno));
-      }
+    case Kind::kTimeout: {
+      const char* doing = e.stage() == Stage::kConnecting ? "connecting"
+                          : e.stage() == Stage::kSending  ? "sending the request"
+                                                          : "waiting for the reply";
+      return Failure("no reply from staad at " + path + " within " + std::to_string(kReplyTimeout.count()) + " s (" +
+                     doing + ")");
     }
+    case Kind::kSend: return Failure("cannot send to " + path + ": " + staa::rt::errnoText(e.error()));
+    case Kind::kReceive: return Failure("cannot read from " + path + ": " + staa::rt::errnoText(e.error()));
+    case Kind::kClosed:
+      return Failure("staad at " + path + " closed the connection without a reply" +
+                     (e.bytes() == 0 ? std::string() : " (after " + std::to_string(e.bytes()) + " bytes of a line)"));
+    case Kind::kTooLong: return Failure("reply from " + path + " is longer than 1 MiB without a line end");
+    default: return Failure(e.what());  // socket(), poll: the call and the system's text
   }
-
-  std::string receiveLine() {
-    std::string reply;
-    char buf[4096];
-    for (;;) {
-      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
-      if (n > 0) {
-        reply.append(buf, static_cast<std::size_t>(n));
-        if (const auto nl = reply.find('\n'); nl != std::string::npos) return reply.substr(0, nl);
-        if (reply.size() > kMaxReplyBytes) throw Failure("reply from " + path_ + " is longer than 1 MiB without a line end");
-      } else if (n == 0) {
-        throw Failure("staad at " + path_ + " closed the connection without a reply" +
-                      (reply.empty() ? std::string() : " (after " + std::to_string(reply.size()) + " bytes of a line)"));
-      } else if (errno == EAGAIN || errno == EWOULDBLOCK) {
-        waitFor(POLLIN, "waiting for the reply");
-      } else if (errno != EINTR) {
-        throw Failure("cannot read from " + path_ + ": " + errnoText(errno));
-      }
-    }
-  }
-
- private:
-  [[noreturn]] void cannotConnect(int error) const {
-    std::string msg = "cannot connect to " + path_ + ": " + errnoText(error);
-    if (error == EAGAIN) msg += " (staad's connection queue is full)";
-    msg += " (is staad running? --socket or STAAD_SOCKET)";
-    throw Failure(msg);
-  }
-
-  void waitFor(short events, const char* doing) const {
-    for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline_ - SteadyClock::now());
-      if (left.count() <= 0) {
-        throw Failure("no reply from staad at " + path_ + " within " + std::to_string(kReplyTimeout.count()) + " s (" + doing + ")");
-      }
-      pollfd p{fd_, events, 0};
-      const int r = ::poll(&p, 1, static_cast<int>(left.count()) + 1);
-      if (r > 0) return;  // ready, or an error/hang-up the next call reports with its errno
-      if (r < 0 && errno != EINTR) throw Failure(std::string("poll: ") + errnoText(errno));
-    }
-  }
-
-  std::string path_;
-  SteadyClock::time_point deadline_;
-  int fd_ = -1;
-};
+}
 
 // Sends one request and returns the reply object; a reply with "ok": false becomes a Failure
 // carrying staad's own error text.
 Json ask(const std::string& socket_path, const staa::staad::Request& request) {
-  Connection c(socket_path, SteadyClock::now() + kReplyTimeout);
-  c.send(staa::staad::requestLine(request));
-  const std::string line = c.receiveLine();
+  std::string line;
+  try {
+    const auto timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(kReplyTimeout);
+    staa::rt::UnixLineClient c(socket_path, timeout.count());
+    c.send(staa::staad::requestLine(request));
+    line = c.receiveLine(kMaxReplyBytes);
+  } catch (const staa::rt::SocketError& e) {
+    throw exchangeFailure(e, socket_path);
+  }
   Json reply;
   try {
     reply = Json::parse(line);
@@ -288,8 +222,8 @@ std::string socketPath(const std::string& option) {
       path = kDefaultSocket;
     }
   }
-  if (path.size() >= sizeof(sockaddr_un{}.sun_path)) {
-    throw InputError(from + ": a Unix socket path is at most " + std::to_string(sizeof(sockaddr_un{}.sun_path) - 1) +
+  if (path.size() > staa::rt::kMaxUnixPathBytes) {
+    throw InputError(from + ": a Unix socket path is at most " + std::to_string(staa::rt::kMaxUnixPathBytes) +
                      " bytes, got " + std::to_string(path.size()) + ": " + path);
   }
   return path;

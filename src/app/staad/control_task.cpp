@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace staa::staad {
 
@@ -12,12 +13,19 @@ rt::Nanos secondsToNanos(double s) { return static_cast<rt::Nanos>(std::llround(
 ControlConfig controlConfigOf(const DaemonConfig& config) {
   ControlConfig c = config.control;
   c.rate_hz = config.control_hz;
-  c.max_dynamic_obstacles = hal::ObstacleFrame::kMaxObstacles;
+  c.max_moving_obstacles = hal::ObstacleFrame::kMaxObstacles;
   return c;
 }
 
-PlannerBudget budgetOf(const DaemonConfig& config, ClockFn clock) {
-  return config.budget.make(clock);
+PlannerBudget budgetOf(const DaemonConfig& config, const rt::Clock& clock) {
+  if (config.budget.isExpansions()) return config.budget.make();  // reads no clock
+  const rt::Clock::NowFunction now = clock.nowFunction();
+  if (now == nullptr) {
+    throw std::invalid_argument(
+        "ControlTask: a wall-clock budget (budget.ms) needs a clock the planner can read (the monotonic clock), "
+        "not a test's manual clock: use budget.expansions");
+  }
+  return config.budget.make(now);
 }
 
 DaemonState fromCycleState(CycleState s) {
@@ -66,16 +74,16 @@ hal::VelocityCommand brakeCommand(rt::Nanos stamp) {
   return c;
 }
 
-ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, ClockFn planner_clock)
+ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, rt::Clock& clock)
     : ch_(channels),
-      clock_(planner_clock),
+      clock_(clock),
       period_(secondsToNanos(1.0 / config.control_hz)),
       odometry_timeout_(secondsToNanos(config.odometry_timeout_s)),
       obstacles_timeout_(secondsToNanos(config.obstacles_timeout_s)),
-      budget_(budgetOf(config, planner_clock)),
+      budget_(budgetOf(config, clock)),
       limits_(config.robot.limits),
       cycle_(config.map, config.robot, controlConfigOf(config)),
-      obstacles_(hal::ObstacleFrame::kMaxObstacles) {}
+      obstacles_(cycle_.obstacleCapacity()) {}
 
 void ControlTask::log(rt::Nanos now, rt::LogLevel level, const char* message, double a, double b, double c,
                       std::uint8_t count) {
@@ -126,8 +134,8 @@ void ControlTask::forcedOverrun(rt::Nanos now) {
   const std::uint32_t ms = ch_.debug_overrun_ms.exchange(0, std::memory_order_acq_rel);
   if (ms == 0) return;
   log(now, rt::LogLevel::kWarning, "debug: forced overrun, busy-waiting (ms)", static_cast<double>(ms), 0.0, 0.0, 1);
-  const std::int64_t until = clock_() + static_cast<std::int64_t>(ms) * 1'000'000;
-  while (clock_() < until) {
+  const rt::Nanos until = clock_.now() + static_cast<rt::Nanos>(ms) * rt::kNanosPerMilli;
+  while (clock_.now() < until) {
   }
 }
 
@@ -193,7 +201,7 @@ void ControlTask::setState(rt::Nanos now, DaemonState state, FaultKind fault) {
   }
 }
 
-void ControlTask::cycle(rt::Nanos now) {
+void ControlTask::step(rt::Nanos now) {
   flushTelemetry();  // the previous cycle's record, now that its overrun is known
   takeRequests(now);
   forcedOverrun(now);
@@ -291,22 +299,9 @@ void ControlTask::publishStatus(rt::Nanos now) {
   s.goal = goal_;
   s.goal_id = goal_id_;
   s.fault = fault_;
-  s.base_fault = base_.status.fault;
-  s.base_fault_code = base_.status.fault_code;
-  s.base_enabled = base_.status.enabled;
-  s.base_bad_frames = base_.status.bad_frames;
-  s.base_rx_overflows = base_.status.rx_overflows;
-  s.base_error_frames = base_.status.error_frames;
+  s.base = base_.status;
   s.cycles = cycles_;
-  if (loop_ != nullptr) {
-    const rt::PeriodicCounters& c = loop_->counters();
-    s.overruns = c.overruns;
-    s.execution_overruns = c.execution_overruns;
-    s.late_wakeups = c.late_wakeups;
-    s.preempted = c.preempted;
-    s.skipped_periods = c.skipped_periods;
-  }
-  // Percentiles are read by the service thread from the loop's histograms (costly here).
+  // The thread's timing is read by the service thread from the activity (costly here).
   s.odometry_age_s = ageSeconds(now, base_.odometry.stamp);
   s.obstacles_age_s = ageSeconds(now, obstacles_stamp_);
   s.expansions = last_output_.planned ? last_output_.plan.stats.pops : 0u;

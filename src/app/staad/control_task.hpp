@@ -1,9 +1,9 @@
 #pragma once
-// What staad's control thread does in one cycle, as a plain object (like Orocos's
-// SlaveActivity: *what* runs is separate from *when*): the daemon calls cycle() from its
-// 30 Hz periodic thread, the tests call it in lockstep with a manual time line.
+// What staad's control thread does in one cycle, as a runnable (rt/activity.hpp: *what*
+// runs is separate from *when*): the daemon's 30 Hz periodic activity steps it, the tests
+// step it in lockstep on a manual time line.
 //
-// cycle(now), top to bottom:
+// step(now), top to bottom:
 //   1. requests from the service thread: goal, stop, pose (forwarded to the base thread);
 //      a forced overrun (debug.faults, tests) busy-waits here;
 //   2. the latest odometry + base status, and the latest obstacle frame;
@@ -22,6 +22,8 @@
 #include "control/control_cycle.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "planner/budget.hpp"
+#include "rt/activity.hpp"
+#include "rt/clock.hpp"
 #include "rt/periodic.hpp"
 
 #include <array>
@@ -29,23 +31,25 @@
 
 namespace staa::staad {
 
-class ControlTask {
+class ControlTask final : public rt::Runnable {
  public:
-  // `planner_clock` drives a wall-clock budget (config budget.ms); with budget.expansions
-  // the run is reproducible and the clock is not read by the planner.
-  ControlTask(const DaemonConfig& config, Channels& channels, ClockFn planner_clock = &steadyClockNs);
+  // `clock` is the daemon's: a forced overrun busy-waits on it, and a wall-clock budget
+  // (config budget.ms) is read from it (its nowFunction(): a test's manual clock has none,
+  // so with it the budget must be budget.expansions, else std::invalid_argument). With
+  // budget.expansions the run is reproducible and the planner reads no clock.
+  ControlTask(const DaemonConfig& config, Channels& channels, rt::Clock& clock);
   ControlTask(const ControlTask&) = delete;
   ControlTask& operator=(const ControlTask&) = delete;
 
+  // The periodic loop that steps this task (same thread): each telemetry record learns
+  // whether its cycle overran. Optional (lockstep tests step without one).
+  void start(const rt::PeriodicLoop& loop) override { loop_ = &loop; }
   // One control cycle at time `now` (the time this cycle woke).
-  void cycle(rt::Nanos now);
+  void step(rt::Nanos now) override;
+  // The last cycle's telemetry record (each cycle pushes its predecessor's).
+  void stop(rt::Nanos) override { flushTelemetry(); }
 
-  // The periodic loop that runs this task (same thread): its counters go into the status
-  // and each telemetry record learns whether its cycle overran. Optional (lockstep tests).
-  void attachLoop(const rt::PeriodicLoop* loop) { loop_ = loop; }
-
-  // Pushes the last cycle's telemetry record (each cycle pushes its predecessor's; the
-  // control thread calls this once more when it ends).
+  // Pushes the last cycle's telemetry record.
   void flushTelemetry();
 
   // What the last cycle decided (control thread, or the test driving it).
@@ -72,7 +76,7 @@ class ControlTask {
            std::uint8_t count = 0);
 
   Channels& ch_;
-  ClockFn clock_;  // the planner's clock; also times a forced overrun
+  rt::Clock& clock_;
   rt::Nanos period_;
   rt::Nanos odometry_timeout_;
   rt::Nanos obstacles_timeout_;

@@ -6,12 +6,12 @@
 #include "app/staad/io_tasks.hpp"
 #include "app/staad/service.hpp"
 #include "world/sim_hal.hpp"
-#include "hal/socketcan/can_transport.hpp"
-#include "hal/socketcan/socketcan_base.hpp"
+#include "hal/socketcan/socketcan.hpp"
+#include "rt/activity.hpp"
 #include "rt/alloc_count.hpp"
-#include "rt/periodic.hpp"
 #include "rt/realtime.hpp"
 #include "rt/sd_notify.hpp"
+#include "rt/signals.hpp"
 
 #include <atomic>
 #include <cmath>
@@ -36,17 +36,6 @@ constexpr int kServicePollMs = 10;
 
 rt::Nanos periodOf(double hz) { return static_cast<rt::Nanos>(std::llround(1e9 / hz)); }
 
-// One periodic real-time thread: its schedule is created by the thread itself (before it
-// marks itself real-time); other threads read it only after `started` (for the control
-// thread: after its first heartbeat).
-struct Worker {
-  explicit Worker(const char* n) : name(n) {}
-  const char* name;
-  rt::RtThread thread;
-  std::optional<rt::PeriodicLoop> loop;
-  std::atomic<bool> started{false};
-};
-
 class Daemon {
  public:
   Daemon(DaemonConfig config, rt::Clock& clock, std::ostream& log)
@@ -58,16 +47,15 @@ class Daemon {
  private:
   void createWorkspaces();
   void startThreads();
-  void startPeriodic(Worker& worker, const rt::ThreadSpec& spec, rt::Nanos period, void (Daemon::*body)(rt::Nanos));
-  void controlBody(rt::Nanos now) { task_->cycle(now); }
-  void baseBody(rt::Nanos now) { base_task_->cycle(now); }
-  void perceptionBody(rt::Nanos now) { perception_task_->cycle(now); }
+  // Starts the thread that steps `runnable` at `hz`, as `activity`.
+  void startActivity(std::unique_ptr<rt::PeriodicActivity>& activity, const char* name, rt::Runnable& runnable,
+                     const rt::ThreadSpec& spec, double hz);
   bool waitFor(rt::Nanos timeout, bool (Daemon::*done)() const);
   bool inputsArrived() const { return channels_->base.published() > 0 && channels_->obstacles.published() > 0; }
   bool controlCycled() const { return channels_->heartbeat.load(std::memory_order_acquire) > 0; }
   void shutdown();
   void stopThreads();
-  void reportTiming(const Worker& worker);
+  void reportTiming(const rt::PeriodicActivity* activity);
   void say(const std::string& line) { log_ << "staad: " << line << std::endl; }
 
   DaemonConfig config_;
@@ -75,7 +63,7 @@ class Daemon {
   std::ostream& log_;
   std::optional<rt::Notifier> notifier_;
   std::unique_ptr<hal::SimHal> sim_;                // hal: sim, or obstacles: sim
-  std::unique_ptr<hal::SocketCanBase> can_base_;    // hal: socketcan
+  std::unique_ptr<hal::Base> can_base_;             // hal: socketcan
   std::unique_ptr<NoObstacles> no_obstacles_;       // obstacles: none
   std::unique_ptr<OdometrySlot> odometry_slot_;     // obstacles: depth: the pose for perception
   std::unique_ptr<OdometryTap> odometry_tap_;       // ... published by the base thread
@@ -85,10 +73,10 @@ class Daemon {
   std::unique_ptr<BaseTask> base_task_;
   std::unique_ptr<PerceptionTask> perception_task_;
   std::unique_ptr<Service> service_;
-  std::atomic<bool> running_{true};  // the periodic threads loop while set
-  Worker control_{"control"};
-  Worker base_{"base"};
-  Worker perception_{"perception"};
+  // The threads that step the tasks (declared last: they end before the tasks go).
+  std::unique_ptr<rt::PeriodicActivity> base_;
+  std::unique_ptr<rt::PeriodicActivity> perception_;
+  std::unique_ptr<rt::PeriodicActivity> control_;
 };
 
 void Daemon::createWorkspaces() {
@@ -120,9 +108,8 @@ void Daemon::createWorkspaces() {
     // The bus is opened before anything else runs: a missing interface or socket is named
     // at once (exit 3), not discovered as a stale robot later.
     try {
-      can_base_ = std::make_unique<hal::SocketCanBase>(
-          hal::openCanTransport(config_.socketcan.interface, config_.socketcan.profile), config_.socketcan.profile,
-          Pose2{}, &clock_);  // the clock stamps each command frame's hand-over to the kernel
+      // The clock stamps each command frame's hand-over to the kernel.
+      can_base_ = hal::openSocketCanBase(config_.socketcan.interface, config_.socketcan.profile, Pose2{}, &clock_);
     } catch (const hal::CanTransportError& e) {
       // e.what() names the interface or the socket path, and why.
       std::string message = config_.file.string();
@@ -159,7 +146,7 @@ void Daemon::createWorkspaces() {
     obstacles = no_obstacles_.get();
   }
   channels_ = std::make_unique<Channels>(config_.telemetry_records);
-  task_ = std::make_unique<ControlTask>(config_, *channels_);
+  task_ = std::make_unique<ControlTask>(config_, *channels_, clock_);
   base_task_ = std::make_unique<BaseTask>(*base, *channels_, periodOf(config_.control_hz));
   perception_task_ = std::make_unique<PerceptionTask>(*obstacles, *channels_);
 
@@ -174,29 +161,11 @@ void Daemon::createWorkspaces() {
   service_->open();
 }
 
-void Daemon::startPeriodic(Worker& worker, const rt::ThreadSpec& spec, rt::Nanos period,
-                           void (Daemon::*body)(rt::Nanos)) {
-  worker.thread.start(spec, [this, &worker, period, body] {
-    // Set-up (allocates: the loop's histograms), then real-time from here on.
-    rt::PeriodicLoop& loop = worker.loop.emplace(clock_, period, clock_.now() + period);
-    if (&worker == &control_) task_->attachLoop(&loop);
-    if (&worker == &base_) base_task_->attachLoop(&loop);
-    rt::markRealtimeThread(true);
-    worker.started.store(true, std::memory_order_release);
-    while (running_.load(std::memory_order_acquire)) {
-      const rt::Wake wake = loop.wait();
-      // The body's own CPU time tells an execution overrun (ours) from a body kept off the
-      // CPU (the platform's: preemption, a virtual machine's stolen time).
-      const rt::Nanos cpu0 = rt::threadCpuTime();
-      (this->*body)(wake.woke);
-      const rt::Nanos cpu1 = rt::threadCpuTime();
-      loop.finish(cpu0 >= 0 && cpu1 >= 0 ? cpu1 - cpu0 : -1);
-    }
-    if (&worker == &control_) task_->flushTelemetry();
-    if (&worker == &base_) base_task_->brake(clock_.now());  // the base's last command
-    rt::markRealtimeThread(false);
-  });
-  if (!worker.thread.warning().empty()) say(worker.thread.warning());
+void Daemon::startActivity(std::unique_ptr<rt::PeriodicActivity>& activity, const char* name, rt::Runnable& runnable,
+                           const rt::ThreadSpec& spec, double hz) {
+  activity = std::make_unique<rt::PeriodicActivity>(name, runnable, clock_, periodOf(hz));
+  activity->start(spec);
+  if (!activity->warning().empty()) say(activity->warning());
 }
 
 bool Daemon::waitFor(rt::Nanos timeout, bool (Daemon::*done)() const) {
@@ -209,34 +178,39 @@ bool Daemon::waitFor(rt::Nanos timeout, bool (Daemon::*done)() const) {
 }
 
 void Daemon::startThreads() {
-  startPeriodic(base_, config_.base_thread, periodOf(config_.base_hz), &Daemon::baseBody);
-  startPeriodic(perception_, config_.perception_thread, periodOf(config_.perception_hz), &Daemon::perceptionBody);
+  startActivity(base_, "base", *base_task_, config_.base_thread, config_.base_hz);
+  startActivity(perception_, "perception", *perception_task_, config_.perception_thread, config_.perception_hz);
   if (!waitFor(kInputWait, &Daemon::inputsArrived)) {
     say("warning: no odometry or obstacle frame within 1 s of start-up; the robot is held (fault) until they come");
   }
-  startPeriodic(control_, config_.control_thread, periodOf(config_.control_hz), &Daemon::controlBody);
+  startActivity(control_, "control", *task_, config_.control_thread, config_.control_hz);
   if (!waitFor(kFirstCycleWait, &Daemon::controlCycled)) {
     throw std::runtime_error("the control thread did not run its first cycle within 5 s");
   }
 }
 
 void Daemon::stopThreads() {
-  running_.store(false, std::memory_order_release);
-  for (Worker* w : {&control_, &perception_, &base_}) {
-    if (w->thread.running()) w->thread.join();
+  // All at once, then each joined: the base thread's last command is a brake.
+  for (rt::PeriodicActivity* a : {control_.get(), perception_.get(), base_.get()}) {
+    if (a != nullptr) a->requestStop();
+  }
+  for (rt::PeriodicActivity* a : {control_.get(), perception_.get(), base_.get()}) {
+    if (a != nullptr) a->stop();
   }
 }
 
-void Daemon::reportTiming(const Worker& w) {
-  if (!w.loop) return;
-  const rt::PeriodicCounters& c = w.loop->counters();
-  const rt::TimingSummary e = w.loop->execution().summary();
-  const rt::TimingSummary k = w.loop->wakeLatency().summary();
+void Daemon::reportTiming(const rt::PeriodicActivity* activity) {
+  if (activity == nullptr || !activity->started()) return;
+  const rt::ActivityTiming t = activity->timing();
+  const rt::PeriodicCounters& c = t.counters;
+  const rt::TimingSummary& e = t.execution;
+  const rt::TimingSummary& k = t.wake;
   char line[320];
   std::snprintf(line, sizeof line,
                 "[%s] %llu cycles; execution p50 %.0f us, p99 %.0f us, max %.0f us; wake-up p99 %.0f us, max %.0f us; "
                 "%llu overruns (%llu execution, %llu late wake-ups, %llu preempted), %llu periods skipped",
-                w.name, static_cast<unsigned long long>(c.cycles), e.p50_us, e.p99_us, e.max_us, k.p99_us, k.max_us,
+                activity->name().c_str(), static_cast<unsigned long long>(c.cycles), e.p50_us, e.p99_us, e.max_us,
+                k.p99_us, k.max_us,
                 static_cast<unsigned long long>(c.overruns), static_cast<unsigned long long>(c.execution_overruns),
                 static_cast<unsigned long long>(c.late_wakeups), static_cast<unsigned long long>(c.preempted),
                 static_cast<unsigned long long>(c.skipped_periods));
@@ -267,7 +241,7 @@ void Daemon::shutdown() {
                 s.pose.x, s.pose.y, s.pose.theta, s.v, s.w,
                 static_cast<unsigned long long>(rt::realtimeAllocations()));
   say(line);
-  for (const Worker* w : {&control_, &base_, &perception_}) reportTiming(*w);
+  for (const rt::PeriodicActivity* a : {control_.get(), base_.get(), perception_.get()}) reportTiming(a);
   service_->writeRunSvg(config_.map, config_.robot.footprint);
   service_->close();
 }
@@ -289,11 +263,8 @@ int Daemon::run() {
 
   startThreads();
   rt::resetRealtimeAllocations();
-  service_->setControlTiming(&control_.loop->execution(), &control_.loop->wakeLatency(), control_.thread.realtime());
-  if (base_.started.load(std::memory_order_acquire)) {
-    service_->setBaseTiming(base_task_.get(), &base_.loop->execution(), &base_.loop->wakeLatency(),
-                            base_.thread.realtime());
-  }
+  service_->watchTiming(control_.get(), base_->started() ? base_.get() : nullptr,
+                        base_->started() ? base_task_.get() : nullptr);
   service_->ready(clock_.now());
   {
     std::string hal(toString(config_.hal));
@@ -302,7 +273,7 @@ int Daemon::run() {
     char line[512];
     std::snprintf(line, sizeof line, "ready: hal %s, control %.0f Hz (%s), base %.0f Hz, perception %.0f Hz, socket %s",
                   hal.c_str(), config_.control_hz,
-                  control_.thread.realtime() ? "SCHED_FIFO" : "normal scheduling", config_.base_hz,
+                  control_->realtime() ? "SCHED_FIFO" : "normal scheduling", config_.base_hz,
                   config_.perception_hz, config_.socket_path.c_str());
     say(line);
   }
@@ -354,8 +325,8 @@ int runDaemon(const DaemonOptions& options, rt::Clock& clock, std::ostream& log)
       log << "staad: " << e.what() << std::endl;
       return kExitBadConfig;
     }
-    // Before any thread exists: SIGTERM/SIGINT arrive only through the service's signalfd.
-    blockTerminationSignals();
+    // Before any thread exists: SIGTERM/SIGINT arrive only through the service's descriptor.
+    rt::blockTerminationSignals();
     Daemon daemon(std::move(config), clock, log);
     return daemon.run();
   } catch (const ServiceError& e) {

@@ -31,29 +31,6 @@ std::uint64_t get(const std::atomic<std::uint64_t>& a) { return a.load(std::memo
 
 }  // namespace
 
-rt::PeriodicCounters BaseTask::loopCounters() const {
-  rt::PeriodicCounters c;
-  c.cycles = get(shared_.cycles);
-  c.overruns = get(shared_.overruns);
-  c.execution_overruns = get(shared_.execution_overruns);
-  c.late_wakeups = get(shared_.late_wakeups);
-  c.preempted = get(shared_.preempted);
-  c.skipped_periods = get(shared_.skipped_periods);
-  c.sleep_errors = get(shared_.sleep_errors);
-  return c;
-}
-
-void BaseTask::publishLoopCounters() {
-  const rt::PeriodicCounters& c = loop_->counters();
-  put(shared_.cycles, c.cycles);
-  put(shared_.overruns, c.overruns);
-  put(shared_.execution_overruns, c.execution_overruns);
-  put(shared_.late_wakeups, c.late_wakeups);
-  put(shared_.preempted, c.preempted);
-  put(shared_.skipped_periods, c.skipped_periods);
-  put(shared_.sleep_errors, c.sleep_errors);
-}
-
 void BaseTask::trackCommand(rt::Nanos stamp) {
   if (stamp <= seen_stamp_) return;
   if (seen_stamp_ >= 0 && seen_stamp_ > wire_stamp_) put(unsent_, get(unsent_) + 1);
@@ -69,10 +46,7 @@ void BaseTask::recordWire(rt::Nanos stamp) {
   wire_stamp_ = stamp;
 }
 
-void BaseTask::cycle(rt::Nanos now) {
-  // The loop's counters as of the last cycle's end, for the service thread's status.
-  if (loop_ != nullptr) publishLoopCounters();
-
+void BaseTask::step(rt::Nanos now) {
   // Pose corrections first, so that this period's odometry already reflects them.
   Pose2 pose;
   while (ch_.poses.pop(pose)) {
@@ -136,9 +110,9 @@ void BaseTask::brake(rt::Nanos now) {
 
 PerceptionTask::PerceptionTask(hal::ObstacleSensor& sensor, Channels& channels) : sensor_(sensor), ch_(channels) {}
 
-bool PerceptionTask::cycle(rt::Nanos now) {
+void PerceptionTask::step(rt::Nanos now) {
   hal::ObstacleFrame& frame = ch_.obstacles.writeBuffer();
-  if (!sensor_.read(now, frame)) return false;
+  if (!sensor_.read(now, frame)) return;
   // A test's depth stall: the sensor runs on (the simulated world keeps moving), nothing
   // reaches the control thread.
   const bool stall = ch_.debug_stall_obstacles.load(std::memory_order_acquire);
@@ -147,7 +121,7 @@ bool PerceptionTask::cycle(rt::Nanos now) {
                 stall ? "debug: obstacle frames stalled" : "debug: obstacle frames resumed");
     stalled_ = stall;
   }
-  if (stall) return false;
+  if (stall) return;
   if (frame.dropped > dropped_seen_) {
     rt::LogRecord r;
     r.time = now;
@@ -160,7 +134,6 @@ bool PerceptionTask::cycle(rt::Nanos now) {
   dropped_seen_ = frame.dropped;
   ch_.obstacles.publish();
   ++frames_;
-  return true;
 }
 
 bool NoObstacles::read(rt::Nanos now, hal::ObstacleFrame& out) {

@@ -1,6 +1,7 @@
 #pragma once
-// What staad's base I/O and perception threads do in one period, as plain objects (the
-// threads only call cycle(); tests call it in lockstep with the control task).
+// What staad's base I/O and perception threads do in one period, as runnables
+// (rt/activity.hpp: the daemon's periodic activities step them; tests step them in lockstep
+// with the control task).
 //
 // BaseTask (base_hz): pose corrections forwarded by the control thread; base.read(now);
 // odometry + status published; the command chosen: the control thread's latest while it is
@@ -13,8 +14,8 @@
 // the base driver handed the first frame carrying it to the kernel (hal::Base::lastCommandSent),
 // one sample per command, into a histogram the service thread reads. Its own brakes (no fresh
 // command) are the base thread's, not the control thread's: not measured. A control command
-// replaced before any frame carried it is counted as unsent. attachLoop() gives the task its
-// thread's PeriodicLoop, whose counters it copies into atomics every cycle for the status.
+// replaced before any frame carried it is counted as unsent. Its thread's timing is the
+// activity's (rt::PeriodicActivity::timing()). When the activity stops, the base gets a brake.
 //
 // PerceptionTask (perception_hz): a new obstacle frame from the sensor is published (not
 // while a test stalls it: Channels::debug_stall_obstacles, the frame is read and dropped).
@@ -27,7 +28,7 @@
 #include "app/staad/channels.hpp"
 #include "hal/base.hpp"
 #include "hal/obstacles.hpp"
-#include "rt/periodic.hpp"
+#include "rt/activity.hpp"
 #include "rt/timing_stats.hpp"
 
 #include <atomic>
@@ -42,17 +43,16 @@ enum class CommandSource : std::uint8_t {
 };
 const char* toString(CommandSource source);
 
-class BaseTask {
+class BaseTask final : public rt::Runnable {
  public:
   BaseTask(hal::Base& base, Channels& channels, rt::Nanos control_period);
   BaseTask(const BaseTask&) = delete;
   BaseTask& operator=(const BaseTask&) = delete;
 
-  void cycle(rt::Nanos now);
+  void step(rt::Nanos now) override;
   // The base thread's last words: a brake (the daemon is stopping).
+  void stop(rt::Nanos now) override { brake(now); }
   void brake(rt::Nanos now);
-  // The loop that runs cycle() (from the base thread, before its first cycle).
-  void attachLoop(const rt::PeriodicLoop* loop) { loop_ = loop; }
 
   CommandSource source() const { return source_; }
   const hal::VelocityCommand& lastCommand() const { return last_; }
@@ -60,20 +60,12 @@ class BaseTask {
   std::uint64_t brakes() const { return brakes_; }        // periods braked for lack of commands
   std::uint64_t posesRefused() const { return poses_refused_; }
 
-  // Any thread: the command-to-wire histogram (relaxed atomics), the control commands never
-  // sent, and the attached loop's counters as of the last cycle's start.
+  // Any thread: the command-to-wire histogram (relaxed atomics) and the control commands
+  // never sent.
   const rt::LatencyHistogram& commandToWire() const { return wire_; }
   std::uint64_t commandsUnsent() const { return unsent_.load(std::memory_order_relaxed); }
-  rt::PeriodicCounters loopCounters() const;
 
  private:
-  // The PeriodicCounters, one relaxed atomic each (one writer: the base thread).
-  struct SharedCounters {
-    std::atomic<std::uint64_t> cycles{0}, overruns{0}, execution_overruns{0}, late_wakeups{0}, preempted{0},
-        skipped_periods{0}, sleep_errors{0};
-  };
-
-  void publishLoopCounters();
   // A control command stamp read from the slot: a newer one retires the previous, counted
   // as unsent when no frame carried it.
   void trackCommand(rt::Nanos stamp);
@@ -94,20 +86,18 @@ class BaseTask {
   std::uint64_t fallbacks_ = 0;
   std::uint64_t brakes_ = 0;
   std::uint64_t poses_refused_ = 0;
-  const rt::PeriodicLoop* loop_ = nullptr;
-  SharedCounters shared_;
   rt::LatencyHistogram wire_;  // command-to-wire, 1 us bins up to 100 ms (beyond: overflow, exact max)
   rt::Nanos seen_stamp_ = -1;  // the newest control command stamp read
   rt::Nanos wire_stamp_ = -1;  // the newest one measured on the wire
   std::atomic<std::uint64_t> unsent_{0};
 };
 
-class PerceptionTask {
+class PerceptionTask final : public rt::Runnable {
  public:
   PerceptionTask(hal::ObstacleSensor& sensor, Channels& channels);
-  // True when a new frame was published.
-  bool cycle(rt::Nanos now);
-  std::uint64_t frames() const { return frames_; }
+  // Publishes the sensor's new frame, if it has one.
+  void step(rt::Nanos now) override;
+  std::uint64_t frames() const { return frames_; }  // frames published
 
  private:
   hal::ObstacleSensor& sensor_;

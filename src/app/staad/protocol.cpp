@@ -263,6 +263,65 @@ std::string requestLine(const Request& request) {
   return dumpSafe(j) + "\n";
 }
 
+namespace {
+
+// Each struct of the status in one place: the contract's keys (ARCHITECTURE.md section 6).
+
+// p50 / p99 / max of a histogram, microseconds.
+Json timingJson(const rt::TimingSummary& t) { return {{"p50_us", t.p50_us}, {"p99_us", t.p99_us}, {"max_us", t.max_us}}; }
+
+// A periodic thread's numbers, into `j`: cycle {p50_us, p99_us, max_us, overruns, count},
+// wake {p50_us, p99_us, max_us}, the overruns by cause, skipped periods and realtime. The
+// control thread's are at the status's top level (the contract's `cycle`), the base
+// thread's under threads.base. `count`: the cycles run.
+void addThreadJson(Json& j, const rt::ActivityTiming& t, std::uint64_t count) {
+  j["cycle"] = timingJson(t.execution);
+  j["cycle"]["overruns"] = t.counters.overruns;
+  j["cycle"]["count"] = count;
+  j["wake"] = timingJson(t.wake);
+  j["execution_overruns"] = t.counters.execution_overruns;
+  j["late_wakeups"] = t.counters.late_wakeups;
+  j["preempted"] = t.counters.preempted;
+  j["skipped_periods"] = t.counters.skipped_periods;
+  j["realtime"] = t.realtime;
+}
+
+// The base driver's view: its fault (as in "fault", also while another fault is reported)
+// and the frames it refused on the bus.
+Json baseJson(const hal::BaseStatus& b) {
+  return {{"fault", b.fault == hal::BaseFault::kNone ? Json(nullptr) : Json(hal::toString(b.fault))},
+          {"fault_code", b.fault_code},
+          {"enabled", b.enabled},
+          {"bad_frames", b.bad_frames},
+          {"rx_overflows", b.rx_overflows},
+          {"error_frames", b.error_frames}};
+}
+
+Json commandToWireJson(const CommandToWire& w) {
+  Json j = timingJson(w.latency);
+  j["count"] = w.latency.count;
+  j["unsent"] = w.unsent;
+  return j;
+}
+
+Json faultJson(const Status& status) {
+  switch (status.fault) {
+    case FaultKind::kNone: return nullptr;
+    case FaultKind::kStaleOdometry:
+    case FaultKind::kStaleObstacles: return toString(status.fault);
+    case FaultKind::kBase: {
+      std::string reason = "base: ";
+      reason += hal::toString(status.base.fault);
+      // The base's own code is what a technician looks up in its manual.
+      if (status.base.fault_code != 0) reason += " (code " + std::to_string(status.base.fault_code) + ")";
+      return reason;
+    }
+  }
+  return "unknown";
+}
+
+}  // namespace
+
 nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
   Json j;
   j["state"] = toString(status.state);
@@ -272,63 +331,21 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
   // Which goal `state` is about: a client waiting for its goal ignores "reached" of an older one.
   j["goal_id"] = status.goal_id;
   j["queued_goal_id"] = status.queued_goal_id;
-  switch (status.fault) {
-    case FaultKind::kNone: j["fault"] = nullptr; break;
-    case FaultKind::kStaleOdometry:
-    case FaultKind::kStaleObstacles: j["fault"] = toString(status.fault); break;
-    case FaultKind::kBase: {
-      std::string reason = "base: ";
-      reason += hal::toString(status.base_fault);
-      // The base's own code is what a technician looks up in its manual.
-      if (status.base_fault_code != 0) reason += " (code " + std::to_string(status.base_fault_code) + ")";
-      j["fault"] = reason;
-      break;
-    }
-    default: j["fault"] = "unknown"; break;
-  }
-  j["cycle"] = {{"p50_us", status.cycle_p50_us},
-                {"p99_us", status.cycle_p99_us},
-                {"max_us", status.cycle_max_us},
-                {"overruns", status.overruns},
-                {"count", status.cycles}};
+  j["fault"] = faultJson(status);
+  // cycle (the contract's), and beyond it what an engineer looks at when the contract's
+  // numbers look wrong: wake, the overruns by cause, realtime.
+  addThreadJson(j, status.control_thread, status.cycles);
   j["rt_allocations"] = rt_allocations;
-  // The base driver's view: its fault (as in "fault", also while another fault is reported)
-  // and the frames it refused on the bus.
-  j["base"] = {{"fault", status.base_fault == hal::BaseFault::kNone ? Json(nullptr) : Json(hal::toString(status.base_fault))},
-               {"fault_code", status.base_fault_code},
-               {"enabled", status.base_enabled},
-               {"bad_frames", status.base_bad_frames},
-               {"rx_overflows", status.base_rx_overflows},
-               {"error_frames", status.base_error_frames}};
+  j["base"] = baseJson(status.base);
   // The base I/O path's timing: `threads.base` in the shape of the control thread's numbers,
   // and how long a command took from the planner to the wire.
-  const ThreadTiming& t = status.base_thread;
-  j["threads"]["base"] = {
-      {"cycle",
-       {{"p50_us", t.exec_p50_us}, {"p99_us", t.exec_p99_us}, {"max_us", t.exec_max_us}, {"overruns", t.overruns},
-        {"count", t.cycles}}},
-      {"wake", {{"p50_us", t.wake_p50_us}, {"p99_us", t.wake_p99_us}, {"max_us", t.wake_max_us}}},
-      {"execution_overruns", t.execution_overruns},
-      {"late_wakeups", t.late_wakeups},
-      {"preempted", t.preempted},
-      {"skipped_periods", t.skipped_periods},
-      {"realtime", t.realtime}};
-  const CommandToWire& w = status.command_to_wire;
-  j["base"]["command_to_wire"] = {
-      {"p50_us", w.p50_us}, {"p99_us", w.p99_us}, {"max_us", w.max_us}, {"count", w.count}, {"unsent", w.unsent}};
-
-  // Beyond the contract: what an engineer looks at when the contract's numbers look wrong.
+  addThreadJson(j["threads"]["base"], status.base_thread, status.base_thread.counters.cycles);
+  j["base"]["command_to_wire"] = commandToWireJson(status.command_to_wire);
   j["command"] = {status.v_cmd, status.w_cmd};
-  j["wake"] = {{"p50_us", status.wake_p50_us}, {"p99_us", status.wake_p99_us}, {"max_us", status.wake_max_us}};
-  j["execution_overruns"] = status.execution_overruns;
-  j["late_wakeups"] = status.late_wakeups;
-  j["preempted"] = status.preempted;
-  j["skipped_periods"] = status.skipped_periods;
   // Never seen is null, not -1: a script comparing ages against a limit must not read -1 as fresh.
   auto age = [](double s) { return s < 0.0 ? Json(nullptr) : Json(s); };
   j["staleness"] = {{"odometry_s", age(status.odometry_age_s)}, {"obstacles_s", age(status.obstacles_age_s)}};
   j["planner"] = {{"expansions", status.expansions}, {"depth", status.depth}};
-  j["realtime"] = status.realtime;
   j["time_s"] = status.time_s;
   return j;
 }

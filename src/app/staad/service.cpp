@@ -3,23 +3,13 @@
 #include "app/staad/io_tasks.hpp"
 #include "app/staad/protocol.hpp"
 #include "rt/alloc_count.hpp"
+#include "rt/errors.hpp"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <ostream>
 #include <system_error>
 #include <variant>
-
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/signalfd.h>
-#include <sys/socket.h>
-#include <sys/stat.h>
-#include <sys/un.h>
-#include <unistd.h>
 
 namespace staa::staad {
 
@@ -28,25 +18,10 @@ namespace {
 constexpr std::size_t kMaxPendingReplyBytes = 1u << 20;  // a client that never reads is dropped
 constexpr int kMaxReadsPerRound = 16;                    // one busy client cannot starve the rest
 
-std::string errnoText(int error) { return std::system_category().message(error); }
-
 std::string quoted(const std::string& s) {
   std::string q = "'";
   q.append(s).append("'");
   return q;
-}
-
-sockaddr_un socketAddress(const std::string& path) {
-  sockaddr_un addr{};
-  addr.sun_family = AF_UNIX;
-  if (path.empty() || path.size() >= sizeof addr.sun_path) {
-    std::string message = "control socket ";
-    message.append(quoted(path)).append(": the path must be 1..").append(std::to_string(sizeof addr.sun_path - 1));
-    message.append(" bytes long");
-    throw ServiceError(message);
-  }
-  std::memcpy(addr.sun_path, path.data(), path.size());
-  return addr;
 }
 
 const char* levelName(rt::LogLevel level) {
@@ -60,21 +35,9 @@ const char* levelName(rt::LogLevel level) {
 
 }  // namespace
 
-void blockTerminationSignals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGTERM);
-  sigaddset(&set, SIGINT);
-  const int rc = pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  if (rc != 0) throw ServiceError("pthread_sigmask(SIGTERM, SIGINT): " + errnoText(rc));
-  // A client that hangs up must not kill the daemon (replies use MSG_NOSIGNAL as well).
-  ::signal(SIGPIPE, SIG_IGN);
-}
-
 Service::Service(Channels& channels, const rt::Notifier& notifier, ServiceOptions options, std::ostream& log)
-    : ch_(channels), notifier_(notifier), options_(std::move(options)), log_(log) {
+    : ch_(channels), notifier_(notifier), options_(std::move(options)), log_(log), poller_(kMaxClients + 2) {
   clients_.reserve(kMaxClients);
-  pollfds_.reserve(kMaxClients + 2);
 }
 
 Service::~Service() { close(); }
@@ -99,102 +62,31 @@ void Service::open() {
       throw ServiceError(message);
     }
   }
-  openSignalFd();
+  try {
+    signals_.emplace();
+  } catch (const std::system_error& e) {
+    throw ServiceError(e.what());
+  }
 }
 
 void Service::openSocket() {
   const std::string& path = options_.socket_path;
-  const sockaddr_un addr = socketAddress(path);
-
-  // The directory (e.g. /run/staad/) may not exist yet.
-  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  if (!parent.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(parent, ec);
-    if (ec) {
-      std::string message = "control socket ";
-      message.append(quoted(path)).append(": cannot create the directory ").append(quoted(parent.string()));
-      message.append(": ").append(ec.message());
-      throw ServiceError(message);
-    }
-  }
-
-  // A socket file left behind by a daemon that died is removed; a live daemon is not disturbed.
-  struct stat st{};
-  if (::lstat(path.c_str(), &st) == 0) {
-    if (!S_ISSOCK(st.st_mode)) {
-      std::string message = "control socket ";
-      message.append(quoted(path)).append(": exists and is not a socket (refusing to remove it)");
-      throw ServiceError(message);
-    }
-    const int probe = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (probe < 0) throw ServiceError("socket(AF_UNIX): " + errnoText(errno));
-    const int rc = ::connect(probe, reinterpret_cast<const sockaddr*>(&addr), sizeof addr);
-    const int error = errno;
-    ::close(probe);
-    if (rc == 0) {
-      std::string message = "control socket ";
-      message.append(quoted(path)).append(": another staad is already listening there");
-      throw ServiceError(message);
-    }
-    if (error != ECONNREFUSED) {
-      std::string message = "control socket ";
-      message.append(quoted(path)).append(": exists and cannot be probed: ").append(errnoText(error));
-      throw ServiceError(message);
-    }
-    if (::unlink(path.c_str()) != 0 && errno != ENOENT) {
-      std::string message = "control socket ";
-      message.append(quoted(path)).append(": cannot remove the stale socket: ").append(errnoText(errno));
-      throw ServiceError(message);
-    }
-    info("removed a stale control socket at " + path);
-  }
-
-  listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-  if (listen_fd_ < 0) throw ServiceError("socket(AF_UNIX): " + errnoText(errno));
-  if (::bind(listen_fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
-    const int error = errno;
+  try {
+    listener_.emplace(rt::UnixListener::open(path, options_.socket_mode, static_cast<int>(kMaxClients)));
+  } catch (const rt::SocketError& e) {
     std::string message = "control socket ";
-    message.append(quoted(path)).append(": bind: ").append(errnoText(error));
+    message.append(quoted(path)).append(": ");
+    message.append(e.kind() == rt::SocketError::Kind::kInUse ? "another staad is already listening there" : e.what());
     throw ServiceError(message);
   }
-  socket_created_ = true;
-  if (::chmod(path.c_str(), static_cast<mode_t>(options_.socket_mode)) != 0) {
-    const int error = errno;
-    char mode[16];
-    std::snprintf(mode, sizeof mode, "%04o", options_.socket_mode);
-    std::string message = "control socket ";
-    message.append(quoted(path)).append(": chmod ").append(mode).append(": ").append(errnoText(error));
-    throw ServiceError(message);
-  }
-  if (::listen(listen_fd_, static_cast<int>(kMaxClients)) != 0) {
-    std::string message = "control socket ";
-    message.append(quoted(path)).append(": listen: ").append(errnoText(errno));
-    throw ServiceError(message);
-  }
+  if (listener_->removedStale()) info("removed a stale control socket at " + path);
 }
 
-void Service::openSignalFd() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGTERM);
-  sigaddset(&set, SIGINT);
-  signal_fd_ = ::signalfd(-1, &set, SFD_NONBLOCK | SFD_CLOEXEC);
-  if (signal_fd_ < 0) throw ServiceError("signalfd(SIGTERM, SIGINT): " + errnoText(errno));
-}
-
-void Service::setControlTiming(const rt::LatencyHistogram* execution, const rt::LatencyHistogram* wake, bool realtime) {
-  exec_hist_ = execution;
-  wake_hist_ = wake;
-  realtime_ = realtime;
-}
-
-void Service::setBaseTiming(const BaseTask* task, const rt::LatencyHistogram* execution,
-                            const rt::LatencyHistogram* wake, bool realtime) {
-  base_task_ = task;
-  base_exec_hist_ = execution;
-  base_wake_hist_ = wake;
-  base_realtime_ = realtime;
+void Service::watchTiming(const rt::PeriodicActivity* control, const rt::PeriodicActivity* base,
+                          const BaseTask* base_task) {
+  control_activity_ = control;
+  base_activity_ = base;
+  base_task_ = base_task;
 }
 
 const Status& Service::latest() {
@@ -202,43 +94,15 @@ const Status& Service::latest() {
     status_ = ch_.status.readBuffer();
     if (!options_.svg_path.empty()) run_.observe(status_);
   }
-  status_.realtime = realtime_;
   status_.queued_goal_id = last_goal_id_;
   return status_;
 }
 
 const Status& Service::status() {
   latest();
-  // p50 / p99 / max of a histogram (when there is one) into three status fields.
-  auto summarize = [](const auto* hist, auto& p50, auto& p99, auto& max) {
-    if (hist == nullptr) return;
-    const rt::TimingSummary t = hist->summary();
-    p50 = t.p50_us;
-    p99 = t.p99_us;
-    max = t.max_us;
-  };
-  summarize(exec_hist_, status_.cycle_p50_us, status_.cycle_p99_us, status_.cycle_max_us);
-  summarize(wake_hist_, status_.wake_p50_us, status_.wake_p99_us, status_.wake_max_us);
-  ThreadTiming& bt = status_.base_thread;
-  bt.realtime = base_realtime_;
-  summarize(base_exec_hist_, bt.exec_p50_us, bt.exec_p99_us, bt.exec_max_us);
-  summarize(base_wake_hist_, bt.wake_p50_us, bt.wake_p99_us, bt.wake_max_us);
-  if (base_task_ != nullptr) {
-    const rt::PeriodicCounters c = base_task_->loopCounters();
-    bt.cycles = c.cycles;
-    bt.overruns = c.overruns;
-    bt.execution_overruns = c.execution_overruns;
-    bt.late_wakeups = c.late_wakeups;
-    bt.preempted = c.preempted;
-    bt.skipped_periods = c.skipped_periods;
-    const rt::TimingSummary t = base_task_->commandToWire().summary();
-    CommandToWire& cw = status_.command_to_wire;
-    cw.count = t.count;
-    cw.unsent = base_task_->commandsUnsent();
-    cw.p50_us = t.p50_us;
-    cw.p99_us = t.p99_us;
-    cw.max_us = t.max_us;
-  }
+  if (control_activity_ != nullptr) status_.control_thread = control_activity_->timing();
+  if (base_activity_ != nullptr) status_.base_thread = base_activity_->timing();
+  if (base_task_ != nullptr) status_.command_to_wire = {base_task_->commandToWire().summary(), base_task_->commandsUnsent()};
   return status_;
 }
 
@@ -259,26 +123,22 @@ void Service::stopping() {
 }
 
 bool Service::runOnce(rt::Nanos now, int timeout_ms) {
-  pollfds_.clear();
-  pollfds_.push_back(::pollfd{listen_fd_, POLLIN, 0});
-  pollfds_.push_back(::pollfd{signal_fd_, POLLIN, 0});
-  for (const Client& c : clients_) {
-    pollfds_.push_back(::pollfd{c.fd, static_cast<short>(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
-  }
-  const int n = ::poll(pollfds_.data(), pollfds_.size(), timeout_ms);
-  if (n < 0 && errno != EINTR) {
-    info("poll: " + errnoText(errno));
-  }
-  if (n > 0) {
-    if ((pollfds_[1].revents & POLLIN) != 0 && readSignal()) terminate_ = true;
+  poller_.clear();
+  const std::size_t listening = poller_.watch(listener_->fd(), true, false);
+  const std::size_t signalled = poller_.watch(signals_->fd(), true, false);
+  const std::size_t first_client = listening + 2;
+  for (const Client& c : clients_) poller_.watch(c.stream.fd(), true, !c.out.empty());
+  const rt::Poller::Result polled = poller_.wait(timeout_ms);
+  if (polled.error != 0) info("poll: " + rt::errnoText(polled.error));
+  if (polled.ready > 0) {
+    if (poller_.readable(signalled) && takeSignals()) terminate_ = true;
     for (std::size_t i = 0; i < clients_.size(); ++i) {
-      const short revents = pollfds_[i + 2].revents;
       Client& c = clients_[i];
-      if ((revents & (POLLIN | POLLHUP | POLLERR)) != 0) readClient(c);
-      if (c.fd >= 0 && (revents & POLLOUT) != 0) flushClient(c);
+      if (poller_.readable(first_client + i) || poller_.hungUp(first_client + i)) readClient(c);
+      if (c.stream.isOpen() && poller_.writable(first_client + i)) flushClient(c);
     }
-    std::erase_if(clients_, [](const Client& c) { return c.fd < 0; });
-    if ((pollfds_[0].revents & POLLIN) != 0) acceptClients();
+    std::erase_if(clients_, [](const Client& c) { return !c.stream.isOpen(); });
+    if (poller_.readable(listening)) acceptClients();
   }
   latest();
   drainLogs();
@@ -294,11 +154,10 @@ void Service::drain() {
   drainTelemetry();
 }
 
-bool Service::readSignal() {
+bool Service::takeSignals() {
   bool got = false;
-  signalfd_siginfo info_buf{};
-  while (::read(signal_fd_, &info_buf, sizeof info_buf) == static_cast<ssize_t>(sizeof info_buf)) {
-    info(std::string("received ") + (info_buf.ssi_signo == SIGINT ? "SIGINT" : "SIGTERM") + ": stopping");
+  while (const std::optional<rt::TerminationSignal> signal = signals_->take()) {
+    info(std::string("received ") + rt::toString(*signal) + ": stopping");
     got = true;
   }
   return got;
@@ -306,36 +165,32 @@ bool Service::readSignal() {
 
 void Service::acceptClients() {
   for (;;) {
-    const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
-    if (fd < 0) {
-      if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR && errno != ECONNABORTED) {
-        info("accept: " + errnoText(errno));
-      }
+    int error = 0;
+    std::optional<rt::UnixStream> stream = listener_->accept(error);
+    if (!stream) {
+      if (error != 0) info("accept: " + rt::errnoText(error));
       return;
     }
     if (clients_.size() >= kMaxClients) {
-      const std::string reply = errorReply("too many clients (at most 16)");
-      (void)!::send(fd, reply.data(), reply.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-      ::close(fd);
-      continue;
+      (void)stream->send(errorReply("too many clients (at most 16)"));
+      continue;  // closed as `stream` goes
     }
     Client c;
-    c.fd = fd;
+    c.stream = std::move(*stream);
     clients_.push_back(std::move(c));
   }
 }
 
 void Service::readClient(Client& c) {
   char buf[4096];
-  for (int reads = 0; reads < kMaxReadsPerRound && c.fd >= 0; ++reads) {
-    const ssize_t n = ::read(c.fd, buf, sizeof buf);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+  for (int reads = 0; reads < kMaxReadsPerRound && c.stream.isOpen(); ++reads) {
+    const rt::UnixStream::Result r = c.stream.read(buf, sizeof buf);
+    if (r.io == rt::UnixStream::Io::kWouldBlock) break;
+    if (r.io == rt::UnixStream::Io::kFailed) {
       closeClient(c);  // ECONNRESET and the like
       return;
     }
-    if (n == 0) {
+    if (r.io == rt::UnixStream::Io::kClosed) {
       // The peer closed its side: a last line without its newline still counts.
       if (!c.discarding && !c.in.empty()) {
         const std::string last = std::move(c.in);
@@ -344,10 +199,10 @@ void Service::readClient(Client& c) {
       }
       c.closing = true;
       flushClient(c);
-      if (c.fd >= 0) closeClient(c);
+      if (c.stream.isOpen()) closeClient(c);
       return;
     }
-    const std::string_view data(buf, static_cast<std::size_t>(n));
+    const std::string_view data(buf, r.bytes);
     std::size_t start = 0;
     while (start < data.size()) {
       const std::size_t nl = data.find('\n', start);
@@ -434,25 +289,23 @@ void Service::handleDebug(Client& c, const Request& request) {
 }
 
 void Service::flushClient(Client& c) {
-  while (c.fd >= 0 && !c.out.empty()) {
-    const ssize_t n = ::send(c.fd, c.out.data(), c.out.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+  while (c.stream.isOpen() && !c.out.empty()) {
+    const rt::UnixStream::Result r = c.stream.send(c.out);
+    if (r.io == rt::UnixStream::Io::kWouldBlock) break;
+    if (r.io != rt::UnixStream::Io::kDone) {
       closeClient(c);
       return;
     }
-    c.out.erase(0, static_cast<std::size_t>(n));
+    c.out.erase(0, r.bytes);
   }
-  if (c.fd >= 0 && c.out.size() > kMaxPendingReplyBytes) {
+  if (c.stream.isOpen() && c.out.size() > kMaxPendingReplyBytes) {
     info("dropping a control-socket client that does not read its replies");
     closeClient(c);
   }
 }
 
 void Service::closeClient(Client& c) {
-  if (c.fd >= 0) ::close(c.fd);
-  c.fd = -1;
+  c.stream.close();
   c.in.clear();
   c.out.clear();
 }
@@ -514,8 +367,8 @@ void Service::notifyStatus() {
       break;
     case DaemonState::kFault:
       if (s.fault == FaultKind::kBase) {
-        std::snprintf(text, sizeof text, "fault: base (%s, code %u)", hal::toString(s.base_fault),
-                      static_cast<unsigned>(s.base_fault_code));
+        std::snprintf(text, sizeof text, "fault: base (%s, code %u)", hal::toString(s.base.fault),
+                      static_cast<unsigned>(s.base.fault_code));
       } else {
         std::snprintf(text, sizeof text, "fault: %s", toString(s.fault));
       }
@@ -550,18 +403,8 @@ void Service::watchdog(rt::Nanos now) {
 void Service::close() {
   for (Client& c : clients_) closeClient(c);
   clients_.clear();
-  if (listen_fd_ >= 0) {
-    ::close(listen_fd_);
-    listen_fd_ = -1;
-  }
-  if (socket_created_) {
-    ::unlink(options_.socket_path.c_str());
-    socket_created_ = false;
-  }
-  if (signal_fd_ >= 0) {
-    ::close(signal_fd_);
-    signal_fd_ = -1;
-  }
+  listener_.reset();  // closes it and removes the socket file
+  signals_.reset();
   telemetry_.flush();
   telemetry_.close();
 }

@@ -1,7 +1,7 @@
 #pragma once
 // staad's service thread (normal priority; the daemon's main thread): the control socket,
-// the log and telemetry rings drained, sd_notify. One poll() round at a time over the
-// listening socket, up to kMaxClients clients and a signalfd for SIGTERM/SIGINT, with a short
+// the log and telemetry rings drained, sd_notify. One poll round at a time over the
+// listening socket, up to kMaxClients clients and the SIGTERM/SIGINT descriptor, with a short
 // timeout so that the rings are drained and the watchdog pinged on time.
 //
 // Control socket: a Unix stream socket speaking line-delimited JSON (protocol.hpp). Each
@@ -14,12 +14,15 @@
 // With an SVG path (`--svg`, telemetry.svg) the service keeps the run as it goes (the poses of
 // the telemetry records, decimated; the goals it queued) and draws it when staad stops.
 //
-// The OS calls of the daemon (sockets, poll, signalfd) live in service.cpp only.
+// A dispatcher: the sockets, the poll and the signals are rt's (rt/unix_socket.hpp,
+// rt/signals.hpp).
 
 #include "app/staad/channels.hpp"
 #include "app/staad/run_picture.hpp"
+#include "rt/activity.hpp"
 #include "rt/sd_notify.hpp"
-#include "rt/timing_stats.hpp"
+#include "rt/signals.hpp"
+#include "rt/unix_socket.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -31,8 +34,6 @@
 #include <string>
 #include <vector>
 
-struct pollfd;  // <poll.h>, kept out of this header
-
 namespace staa::staad {
 
 class BaseTask;
@@ -42,10 +43,6 @@ class ServiceError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
-
-// Blocks SIGTERM and SIGINT in the calling thread (and every thread it creates afterwards),
-// so that they arrive only through the service's signalfd. Call before any thread starts.
-void blockTerminationSignals();
 
 struct ServiceOptions {
   std::string socket_path;
@@ -67,16 +64,14 @@ class Service {
 
   // Start-up, before the real-time threads: the control socket (unlinks a stale socket file
   // nobody accepts on; refuses when another daemon listens there), the telemetry file, and
-  // the signalfd (call blockTerminationSignals() first). Throw ServiceError.
+  // the SIGTERM/SIGINT descriptor (call rt::blockTerminationSignals() first). Throw
+  // ServiceError.
   void open();
 
-  // The control thread's timing (its periodic loop's histograms, read through their atomics)
-  // and whether it runs under SCHED_FIFO: they complete the status.
-  void setControlTiming(const rt::LatencyHistogram* execution, const rt::LatencyHistogram* wake, bool realtime);
-  // The same for the base thread, and its task (the loop's counters and the command-to-wire
-  // latency, read through their atomics): `threads.base` and `base.command_to_wire`.
-  void setBaseTiming(const BaseTask* task, const rt::LatencyHistogram* execution, const rt::LatencyHistogram* wake,
-                     bool realtime);
+  // The activities whose timing completes the status: the control thread's (the contract's
+  // `cycle`) and the base thread's (`threads.base`), with the base task's command-to-wire
+  // latency (`base.command_to_wire`). Read through their atomics; null: left empty.
+  void watchTiming(const rt::PeriodicActivity* control, const rt::PeriodicActivity* base, const BaseTask* base_task);
 
   // READY=1 (and the first STATUS=); starts the watchdog pings.
   void ready(rt::Nanos now);
@@ -109,7 +104,7 @@ class Service {
 
  private:
   struct Client {
-    int fd = -1;
+    rt::UnixStream stream;
     std::string in;
     std::string out;
     bool discarding = false;  // dropping the rest of an over-long line
@@ -117,14 +112,13 @@ class Service {
   };
 
   void openSocket();
-  void openSignalFd();
   void acceptClients();
   void readClient(Client& client);
   void handleLine(Client& client, std::string_view line);
   void handleDebug(Client& client, const Request& request);
   void flushClient(Client& client);
   void closeClient(Client& client);
-  bool readSignal();
+  bool takeSignals();
   void drainLogs();
   void drainTelemetry();
   void notifyStatus();
@@ -134,20 +128,15 @@ class Service {
   const rt::Notifier& notifier_;
   ServiceOptions options_;
   std::ostream& log_;
-  int listen_fd_ = -1;
-  int signal_fd_ = -1;
-  bool socket_created_ = false;
+  std::optional<rt::UnixListener> listener_;
+  std::optional<rt::TerminationSignals> signals_;
   std::vector<Client> clients_;
-  std::vector<::pollfd> pollfds_;
+  rt::Poller poller_;
   TelemetryWriter telemetry_;
   Status status_;
-  const rt::LatencyHistogram* exec_hist_ = nullptr;
-  const rt::LatencyHistogram* wake_hist_ = nullptr;
-  bool realtime_ = false;
+  const rt::PeriodicActivity* control_activity_ = nullptr;
+  const rt::PeriodicActivity* base_activity_ = nullptr;
   const BaseTask* base_task_ = nullptr;
-  const rt::LatencyHistogram* base_exec_hist_ = nullptr;
-  const rt::LatencyHistogram* base_wake_hist_ = nullptr;
-  bool base_realtime_ = false;
   bool ready_ = false;
   bool terminate_ = false;
   // sd_notify

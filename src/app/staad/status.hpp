@@ -5,6 +5,8 @@
 
 #include "geometry/types.hpp"
 #include "hal/base.hpp"
+#include "rt/activity.hpp"
+#include "rt/timing_stats.hpp"
 
 #include <cstdint>
 
@@ -19,26 +21,15 @@ enum class FaultKind : std::uint8_t {
   kNone,
   kStaleOdometry,   // no odometry for odometry_timeout
   kStaleObstacles,  // no obstacle (depth) frame for obstacles_timeout
-  kBase,            // the base reports a fault (base_fault says which)
+  kBase,            // the base reports a fault (Status::base.fault says which)
 };
 const char* toString(FaultKind fault);  // "none", "stale_odometry", "stale_obstacles", "base"
 
-// A periodic real-time thread's timing beyond the control thread's (whose fields are in
-// Status itself, for the contract's `cycle`), microseconds.
-struct ThreadTiming {
-  std::uint64_t cycles = 0;
-  double exec_p50_us = 0.0, exec_p99_us = 0.0, exec_max_us = 0.0;  // execution of a cycle
-  double wake_p50_us = 0.0, wake_p99_us = 0.0, wake_max_us = 0.0;  // wake-up latency
-  std::uint64_t overruns = 0, execution_overruns = 0, late_wakeups = 0, preempted = 0, skipped_periods = 0;
-  bool realtime = false;  // runs under SCHED_FIFO
-};
-
 // From a control command's stamp to the base driver's hand-over of the first frame carrying
-// it to the kernel (BaseTask), microseconds.
+// it to the kernel (BaseTask): one sample per command measured.
 struct CommandToWire {
-  std::uint64_t count = 0;   // commands measured (one sample each)
+  rt::TimingSummary latency;
   std::uint64_t unsent = 0;  // control commands replaced before any frame carried them
-  double p50_us = 0.0, p99_us = 0.0, max_us = 0.0;
 };
 
 struct Status {
@@ -52,22 +43,14 @@ struct Status {
   // given by the service thread as it queues goal requests: 1, 2, ... (never reused).
   std::uint64_t goal_id = 0;
   FaultKind fault = FaultKind::kNone;
-  hal::BaseFault base_fault = hal::BaseFault::kNone;
-  std::uint32_t base_fault_code = 0;
-  // The base driver's own view (hal::BaseStatus): enabled, and what it refused on the bus.
-  bool base_enabled = false;
-  std::uint64_t base_bad_frames = 0;    // dropped frames: bad DLC, checksum, counter, range
-  std::uint64_t base_rx_overflows = 0;  // frames lost in the receive queue
-  std::uint64_t base_error_frames = 0;  // CAN error frames (bus-off, restarted, ...)
-  // Control thread timing (execution of a cycle, and its wake-up latency), microseconds.
+  // The base driver's own view: its fault and code, enabled, what it refused on the bus.
+  hal::BaseStatus base;
+  // Control cycles run (the control task's own count, also when a test steps it).
   std::uint64_t cycles = 0;
-  double cycle_p50_us = 0.0, cycle_p99_us = 0.0, cycle_max_us = 0.0;
-  double wake_p50_us = 0.0, wake_p99_us = 0.0, wake_max_us = 0.0;
-  std::uint64_t overruns = 0, execution_overruns = 0, late_wakeups = 0, skipped_periods = 0;
-  std::uint64_t preempted = 0;  // overruns whose cycle used less than a period of CPU
-  // Set by the service thread (from the base thread's loop and BaseTask) when a status is
-  // asked for; the control thread leaves them 0.
-  ThreadTiming base_thread;
+  // Set by the service thread from the periodic activities (and BaseTask) when a status is
+  // asked for; the control thread leaves them empty.
+  rt::ActivityTiming control_thread;
+  rt::ActivityTiming base_thread;
   CommandToWire command_to_wire;
   // Input staleness: seconds since the newest odometry / obstacle frame (-1: never seen).
   double odometry_age_s = -1.0;
@@ -75,7 +58,6 @@ struct Status {
   // The planner's last call.
   std::uint32_t expansions = 0;
   double depth = 0.0;
-  bool realtime = false;  // the control thread runs under SCHED_FIFO
   double time_s = 0.0;    // monotonic time of the snapshot
   // Set by the service thread, not the control thread: the id of the newest goal it queued
   // (0: none yet). It runs ahead of goal_id until the control thread takes that goal (within

@@ -7,7 +7,7 @@
 #include "map/generate.hpp"
 #include "world/world.hpp"
 
-#include "alloc_counter.hpp"
+#include "rt/alloc_count.hpp"
 #include "scenarios.hpp"
 
 #include <gtest/gtest.h>
@@ -16,6 +16,7 @@ namespace staa {
 namespace {
 
 TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_control_alloc must link staa_rt_alloc_hook";
   Scenario s;
   s.map = generateOfficeMap();
   s.robot = paperAgentProfile();
@@ -45,7 +46,7 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
     ControlCycle cycle(s.map, s.robot, config);
     cycle.setLocalController(variant.baseline);
     cycle.setGoal(s.goal);
-    DynamicObstacleSet obstacles(config.max_dynamic_obstacles);
+    DynamicObstacleSet obstacles(config.max_moving_obstacles);
     std::vector<Polygon> polys(world.moverCount());
     std::vector<PolygonView> views(world.moverCount());
     std::vector<Vec2> velocities(world.moverCount());
@@ -64,7 +65,7 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
       const RobotState& r = world.robot();
       in.robot = UnicycleState{r.pose.x, r.pose.y, r.pose.theta, r.v, r.w};
       in.obstacles = &obstacles;
-      test::AllocationScope scope;
+      rt::AllocationScope scope;
       obstacles.set(views, velocities);
       const CycleOutput out = cycle.step(in, PlannerBudget::expansions(300));
       allocations += scope.count();

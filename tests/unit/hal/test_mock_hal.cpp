@@ -2,7 +2,7 @@
 // stalled odometry, faults, the command log, and pushed / stalled / empty obstacle frames.
 #include "hal/mock/mock_hal.hpp"
 
-#include "alloc_counter.hpp"
+#include "rt/alloc_count.hpp"
 
 #include <gtest/gtest.h>
 
@@ -160,9 +160,10 @@ TEST(MockBase, CommandsLogsEveryWriteInOrderUpToItsCapacity) {
 }
 
 TEST(MockBase, ReadAndWriteAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_mock_hal must link staa_rt_alloc_hook";
   MockBase base(paperAgentProfile(), {}, 2000);
   base.read(0);
-  test::AllocationScope scope;
+  rt::AllocationScope scope;
   for (int k = 1; k <= 1000; ++k) {
     base.write(k, command(0.5, 0.2));
     base.read(k * rt::kNanosPerMilli);

@@ -2,7 +2,7 @@
 // base on the other end, with the profile's own encoders, and steps time by hand.
 #include "hal/socketcan/socketcan_base.hpp"
 
-#include "alloc_counter.hpp"
+#include "rt/alloc_count.hpp"
 
 #include <gtest/gtest.h>
 
@@ -629,8 +629,9 @@ TEST_F(SocketCanBaseTest, BadStatusFramesAreCountedAndNotActedOn) {
 // ---- real-time ----
 
 TEST_F(SocketCanBaseTest, ReadAndWriteAllocateNothingOverThousandsOfCycles) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_socketcan_base must link staa_rt_alloc_hook";
   {  // the counter counts (a direct call: a new-expression could be elided)
-    test::AllocationScope probe;
+    rt::AllocationScope probe;
     ::operator delete(::operator new(16));
     ASSERT_EQ(probe.count(), 1u);
   }
@@ -644,7 +645,7 @@ TEST_F(SocketCanBaseTest, ReadAndWriteAllocateNothingOverThousandsOfCycles) {
   const unsigned char short_record[5] = {1, 2, 3, 4, 5};
   can_frame sink[64];
   std::size_t faults_seen = 0;
-  test::AllocationScope scope;
+  rt::AllocationScope scope;
   for (int k = 1; k <= 5000; ++k) {
     const rt::Nanos t = k * 10 * kMs;
     peer->odometry(0.5, 0.1);

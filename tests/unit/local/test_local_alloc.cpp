@@ -6,7 +6,7 @@
 
 #include "map/generate.hpp"
 
-#include "alloc_counter.hpp"
+#include "rt/alloc_count.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,6 +17,7 @@ namespace staa {
 namespace {
 
 TEST(LocalAllocations, ThousandUpdatesAndPredictionsAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_local_alloc must link staa_rt_alloc_hook";
   const PolygonMap office = generateOfficeMap();
   PolygonSet walls;
   walls.assign(std::span<const Polygon>(office.obstacles), PolygonSet::Options{});
@@ -36,7 +37,7 @@ TEST(LocalAllocations, ThousandUpdatesAndPredictionsAllocateNothing) {
   FixedPolygon predicted, inflated;
 
   int occupied = 0, inflated_vertices = 0;
-  test::AllocationScope scope;
+  rt::AllocationScope scope;
   for (const Pose2& robot : poses) {
     path[0] = robot.position();
     path[1] = robot.transform({3.0, 0.5});

@@ -2,7 +2,7 @@
 // counting operator new replaces the global one).
 #include "path/global_path.hpp"
 
-#include "alloc_counter.hpp"
+#include "rt/alloc_count.hpp"
 #include "posts_scene.hpp"
 #include "random_scenes.hpp"
 
@@ -12,6 +12,7 @@ namespace staa {
 namespace {
 
 TEST(PathAllocations, WarmQueriesAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_path_alloc must link staa_rt_alloc_hook";
   std::mt19937_64 rng(5);
   PolygonMap map;
   map.bounds = Box{{0, 0}, {20, 20}};
@@ -25,7 +26,7 @@ TEST(PathAllocations, WarmQueriesAllocateNothing) {
   // Warm up (first queries may size nothing more, but keep the rule: measure after warm-up).
   for (const auto& [s, g] : queries) planner.plan(s, g, views);
   int found = 0;
-  test::AllocationScope scope;
+  rt::AllocationScope scope;
   for (const auto& [s, g] : queries) {
     found += planner.plan(s, g, views).status == PathStatus::kFound;
     found += planner.plan(s, g).status == PathStatus::kFound;
@@ -38,6 +39,7 @@ TEST(PathAllocations, WarmQueriesAllocateNothing) {
 // GlobalPath.AStartWhoseNearestFreePointIsACutOffSliverGetsThePathFromAroundIt): the queries
 // around it and the path with the start in front allocate nothing either.
 TEST(PathAllocations, NudgedStartsAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_path_alloc must link staa_rt_alloc_hook";
   const Vec2 c(5.0, 2.0);
   const PolygonMap map = test::postsAroundAHole(c);
   GlobalPathOptions options;
@@ -49,7 +51,7 @@ TEST(PathAllocations, NudgedStartsAllocateNothing) {
     for (const Vec2& s : starts) planner.plan(s, g);
   }
   int nudged = 0;
-  test::AllocationScope scope;
+  rt::AllocationScope scope;
   for (int round = 0; round < 3; ++round) {
     for (const Vec2& g : goals) {
       for (const Vec2& s : starts) nudged += planner.plan(s, g).start_nudged ? 1 : 0;

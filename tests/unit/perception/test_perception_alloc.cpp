@@ -2,7 +2,7 @@
 // real-time), the simulated camera nothing after its first frame; and what a frame costs.
 #include "perception/depth_obstacles.hpp"
 
-#include "alloc_counter.hpp"
+#include "rt/alloc_count.hpp"
 #include "rt/clock.hpp"
 #include "world/sim_depth_camera.hpp"
 #include "depth_scenes.hpp"
@@ -46,11 +46,12 @@ Recording record(const hal::CameraMount& mount, int count) {
 }
 
 TEST(PerceptionAlloc, DetectorAllocatesNothingOverManyFrames) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_perception_alloc must link staa_rt_alloc_hook";
   const Recording rec = record(test::hsrHeadMount(), 20);
   DepthObstacleDetector detector(test::officeMap(), hal::CameraIntrinsics{}, test::hsrHeadMount());
   hal::ObstacleFrame out;
   std::size_t seen = 0, tracked = 0;
-  test::AllocationScope scope;
+  rt::AllocationScope scope;
   // 600 frames (20 s at 30 Hz), the recording played forwards again and again: the jump back
   // to its start is a relocalisation the tracker follows; every 7th loop a stamp gap resets it.
   rt::Nanos stamp = 0;
@@ -69,6 +70,7 @@ TEST(PerceptionAlloc, DetectorAllocatesNothingOverManyFrames) {
 }
 
 TEST(PerceptionAlloc, SimCameraRendersWithoutAllocatingAfterItsFirstFrame) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_perception_alloc must link staa_rt_alloc_hook";
   World world(test::officeMap(), test::hsrProfile(), test::kCorridorStart,
               {test::boxMover({6.5, 3.9}, {6.5, 5.1}, 0.5)});
   hal::SimDepthConfig c;
@@ -79,7 +81,7 @@ TEST(PerceptionAlloc, SimCameraRendersWithoutAllocatingAfterItsFirstFrame) {
   std::size_t allocations = 0;
   for (int k = 1; k <= 30; ++k) {
     world.step(kDt, 0.0, 0.5);
-    test::AllocationScope scope;
+    rt::AllocationScope scope;
     ASSERT_TRUE(camera.read(k * kPeriod, *frame));
     allocations += scope.count();
   }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <new>
@@ -111,6 +112,33 @@ TEST(AllocHook, UnmarkingStopsCountingAndResetClears) {
   EXPECT_EQ(while_marked, 2u);
   EXPECT_EQ(after_unmark, 2u);
   EXPECT_EQ(after_reset, 0u);
+}
+
+// The tests' scopes: the calling thread's allocations, marked real-time or not; another
+// thread's never.
+TEST(AllocHook, AScopeCountsTheCallingThreadsAllocationsOnly) {
+  ASSERT_TRUE(hookInstalled());
+  std::atomic<bool> go{false};
+  std::uint64_t inner = 0;
+  std::thread other([&] {
+    while (!go.load(std::memory_order_acquire)) {
+    }
+    AllocationScope own;
+    markRealtimeThread(true);
+    delete kept(new int(3));
+    markRealtimeThread(false);
+    delete kept(new int(4));
+    delete[] kept(new int[5]);
+    inner = own.count();
+  });
+  AllocationScope scope;
+  EXPECT_EQ(scope.count(), 0u);
+  delete kept(new int(1));
+  delete[] kept(new int[4]);
+  go.store(true, std::memory_order_release);
+  other.join();
+  EXPECT_EQ(scope.count(), 2u);  // not the other thread's three
+  EXPECT_EQ(inner, 3u);          // marked real-time or not
 }
 
 }  // namespace

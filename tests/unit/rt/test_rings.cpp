@@ -1,10 +1,12 @@
 #include "rt/log_ring.hpp"
+#include "rt/seqlock.hpp"
 #include "rt/spsc_ring.hpp"
 #include "rt/triple_buffer.hpp"
 
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdint>
 #include <cstring>
 #include <thread>
 
@@ -207,6 +209,44 @@ TEST(TripleBuffer, ReaderNeverSeesATornValueAcrossThreads) {
   EXPECT_EQ(last, kFrames);  // the final value always arrives
   EXPECT_GE(updates, 1u);
   EXPECT_EQ(tb.published(), kFrames);
+}
+
+// A periodic thread's counters read by the service thread: every copy is one the writer
+// stored, whole, however the two threads interleave.
+TEST(SeqLock, ReadersNeverSeeATornValueAcrossThreads) {
+  struct Counters {
+    std::uint64_t a = 0, b = 0, c = 0, d = 0, e = 0, f = 0, g = 0;
+  };
+  SeqLock<Counters> shared;
+  EXPECT_EQ(shared.load().g, 0u);
+  // The writer stores until the reader has read enough (on a loaded machine the two may
+  // barely overlap; they always do for some reads).
+  constexpr std::uint64_t kReads = 100'000;
+  std::atomic<bool> enough{false};
+  std::atomic<std::uint64_t> stored{0};
+  std::thread writer([&] {
+    for (std::uint64_t k = 1; !enough.load(std::memory_order_acquire); ++k) {
+      shared.store(Counters{k, k, k, k, k, k, k});
+      stored.store(k, std::memory_order_release);
+    }
+  });
+  while (stored.load(std::memory_order_acquire) == 0) {
+  }
+  std::uint64_t last = 0;
+  bool torn = false;
+  bool backwards = false;
+  for (std::uint64_t r = 0; r < kReads; ++r) {
+    const Counters c = shared.load();
+    torn |= c.a != c.b || c.a != c.c || c.a != c.d || c.a != c.e || c.a != c.f || c.a != c.g;
+    backwards |= c.a < last;
+    last = c.a;
+  }
+  enough.store(true, std::memory_order_release);
+  writer.join();
+  EXPECT_FALSE(torn);
+  EXPECT_FALSE(backwards);
+  EXPECT_GT(last, 0u);
+  EXPECT_EQ(shared.load().g, stored.load());
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include <unistd.h>
 
@@ -61,7 +62,7 @@ class Lockstep {
       : config(c),
         ch(1024),
         base(c.robot, start),
-        task(c, ch),
+        task(c, ch, clock),
         base_task(base, ch, task.period()),
         perception(sensor, ch),
         control_period(task.period()) {
@@ -75,16 +76,16 @@ class Lockstep {
     while (next_base <= target || next_perception <= target) {
       if (next_base <= next_perception) {
         now = next_base;
-        base_task.cycle(now);
+        base_task.step(now);
         next_base += kBasePeriod;
       } else {
         now = next_perception;
-        perception.cycle(now);
+        perception.step(now);
         next_perception += control_period;
       }
     }
     now = target;
-    if (!control_paused) task.cycle(now);
+    if (!control_paused) task.step(now);
     next_control += control_period;
     drain();
   }
@@ -135,6 +136,7 @@ class Lockstep {
 
   static constexpr rt::Nanos kBasePeriod = 10 * kMs;
   DaemonConfig config;
+  rt::ManualClock clock;  // the task's clock: the expansion budget reads none
   Channels ch;
   hal::MockBase base;
   hal::MockObstacles sensor;
@@ -336,8 +338,8 @@ TEST(ControlTask, BaseFaultBrakesAndClearsWithTheFault) {
   EXPECT_TRUE(isBrake(ls.task.lastCommand().command));
   const Status s = ls.status();
   EXPECT_EQ(s.fault, FaultKind::kBase);
-  EXPECT_EQ(s.base_fault, hal::BaseFault::kEmergencyStop);
-  EXPECT_EQ(s.base_fault_code, 7u);
+  EXPECT_EQ(s.base.fault, hal::BaseFault::kEmergencyStop);
+  EXPECT_EQ(s.base.fault_code, 7u);
 
   ls.base.setFault(hal::BaseFault::kNone, 0);
   ls.steps(2);
@@ -484,7 +486,7 @@ TEST(BaseTask, FallsBackToThePlansNextActionThenBrakesWhenControlFallsSilent) {
   bool saw_next = false;
   for (int i = 0; i < 12; ++i) {
     const rt::Nanos t = ls.next_base;
-    ls.base_task.cycle(t);
+    ls.base_task.step(t);
     ls.next_base += Lockstep::kBasePeriod;
     const rt::Nanos age = t - slot.command.stamp;
     if (age < ls.control_period * 2) {
@@ -506,15 +508,27 @@ TEST(BaseTask, FallsBackToThePlansNextActionThenBrakesWhenControlFallsSilent) {
   ls.control_paused = false;
   ls.next_control = ls.next_base;
   ls.step();
-  ls.base_task.cycle(ls.now + 1);
+  ls.base_task.step(ls.now + 1);
   EXPECT_EQ(ls.base_task.source(), CommandSource::kControl);
 }
 
 TEST(BaseTask, BrakesBeforeTheControlThreadHasSentAnything) {
   Lockstep ls(officeConfig());
-  ls.base_task.cycle(0);
+  ls.base_task.step(0);
   EXPECT_EQ(ls.base_task.source(), CommandSource::kBrake);
   EXPECT_TRUE(isBrake(ls.base_task.lastCommand()));
+}
+
+// The daemon's clock is the planner's: a wall-clock budget reads it as a function; a test's
+// manual clock has none, so with it only an expansion budget is taken.
+TEST(ControlTask, AWallClockBudgetReadsTheInjectedClockWhichAManualClockCannotBe) {
+  DaemonConfig c = officeConfig();
+  c.budget = BudgetSpec::wallClockMs(19.0);
+  Channels ch(64);
+  rt::ManualClock manual;
+  EXPECT_THROW({ ControlTask task(c, ch, manual); }, std::invalid_argument);
+  rt::MonotonicClock monotonic;
+  EXPECT_NO_THROW({ ControlTask task(c, ch, monotonic); });
 }
 
 TEST(ControlTask, ThousandCyclesWithGoalChangesAndAStopAllocateNothing) {

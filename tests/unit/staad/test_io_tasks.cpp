@@ -1,8 +1,8 @@
 // The base I/O thread's bookkeeping for the status: the command-to-wire latency (a control
-// command's stamp to the driver's hand-over of the first frame carrying it) and the loop's
-// counters published for the service thread. BaseTask runs in lockstep on a manual time
-// line, with the SocketCAN driver over a socketpair (the test plays the base on the other
-// end) or the scripted MockBase.
+// command's stamp to the driver's hand-over of the first frame carrying it). BaseTask runs in
+// lockstep on a manual time line, with the SocketCAN driver over a socketpair (the test plays
+// the base on the other end) or the scripted MockBase. (Its thread's counters are the
+// activity's: tests/unit/rt/test_activity.cpp.)
 #include "app/staad/channels.hpp"
 #include "app/staad/io_tasks.hpp"
 #include "robot/robot_profile.hpp"
@@ -11,7 +11,6 @@
 #include "hal/socketcan/can_profile.hpp"
 #include "hal/socketcan/socketcan_base.hpp"
 #include "rt/alloc_count.hpp"
-#include "rt/periodic.hpp"
 
 #include "shared_dir.hpp"
 
@@ -62,7 +61,7 @@ class BaseTaskOverSocketCan : public ::testing::Test {
   // One base period at `now`; the driver's sends read `sent_at` off the clock.
   void cycleAt(rt::Nanos now, rt::Nanos sent_at) {
     clock.set(sent_at);
-    task->cycle(now);
+    task->step(now);
   }
 
   // The command frames the base received since the last call.
@@ -180,7 +179,7 @@ TEST(BaseTaskWire, EveryControlCommandIsMeasuredOnceWithTheDriversDelayAndNothin
       next_control += kControlPeriod;
       ++commands;
     }
-    task.cycle(now);
+    task.step(now);
   }
   rt::markRealtimeThread(false);
   EXPECT_EQ(rt::realtimeAllocations(), 0u);
@@ -198,37 +197,10 @@ TEST(BaseTaskWire, EveryControlCommandIsMeasuredOnceWithTheDriversDelayAndNothin
   for (int k = 0; k < 30; ++k) {
     publishCommand(ch, 0.2, next_control);
     next_control += kControlPeriod;
-    task.cycle(next_control - kControlPeriod + kMs);
+    task.step(next_control - kControlPeriod + kMs);
   }
   EXPECT_EQ(task.commandToWire().summary().count, measured);
   EXPECT_EQ(task.commandsUnsent(), 29u);  // the 30th is still the latest
-}
-
-// The status's `threads.base`: the loop's counters as the base thread last saw them.
-TEST(BaseTaskWire, PublishesItsLoopsCountersIncludingAnOverrun) {
-  const RobotProfile robot = loadRobotProfile(test::sourceDir() / "config/robots/hsr.yaml");
-  hal::MockBase base(robot);
-  Channels ch(64);
-  BaseTask task(base, ch, kControlPeriod);
-  rt::ManualClock clock(0);
-  rt::PeriodicLoop loop(clock, kBasePeriod, kBasePeriod, 1000);
-  task.attachLoop(&loop);
-  EXPECT_EQ(task.loopCounters().cycles, 0u);
-
-  for (int k = 0; k < 5; ++k) {
-    const rt::Wake wake = loop.wait();
-    task.cycle(wake.woke);
-    if (k == 2) clock.advance(25 * kMs);  // this cycle runs past two deadlines
-    loop.finish();
-  }
-  const rt::Wake wake = loop.wait();
-  task.cycle(wake.woke);  // publishes what the five cycles before it counted
-  const rt::PeriodicCounters c = task.loopCounters();
-  EXPECT_EQ(c.cycles, 5u);
-  EXPECT_EQ(c.overruns, 1u);
-  EXPECT_EQ(c.execution_overruns, 1u);
-  EXPECT_EQ(c.skipped_periods, loop.counters().skipped_periods);
-  EXPECT_GE(c.skipped_periods, 2u);
 }
 
 }  // namespace

@@ -147,21 +147,23 @@ Status filledStatus() {
   s.goal_id = 41;
   s.queued_goal_id = 42;
   s.cycles = 12345;
-  s.cycle_p50_us = 850.0;
-  s.cycle_p99_us = 4100.0;
-  s.cycle_max_us = 9000.5;
-  s.wake_p50_us = 40.0;
-  s.wake_p99_us = 120.0;
-  s.wake_max_us = 600.0;
-  s.overruns = 2;
-  s.execution_overruns = 1;
-  s.late_wakeups = 3;
-  s.skipped_periods = 4;
+  rt::ActivityTiming& control = s.control_thread;
+  control.execution.p50_us = 850.0;
+  control.execution.p99_us = 4100.0;
+  control.execution.max_us = 9000.5;
+  control.wake.p50_us = 40.0;
+  control.wake.p99_us = 120.0;
+  control.wake.max_us = 600.0;
+  control.counters.overruns = 2;
+  control.counters.execution_overruns = 1;
+  control.counters.late_wakeups = 3;
+  control.counters.skipped_periods = 4;
+  control.counters.cycles = 12344;  // the loop's finished cycles: `count` is the task's own
+  control.realtime = true;
   s.odometry_age_s = 0.004;
   s.obstacles_age_s = -1.0;
   s.expansions = 1000;
   s.depth = 7.5;
-  s.realtime = true;
   s.time_s = 321.5;
   return s;
 }
@@ -256,11 +258,11 @@ TEST(Protocol, StatusJsonFaultNamesTheReason) {
   s.fault = FaultKind::kStaleObstacles;
   EXPECT_EQ(statusJson(s, 0)["fault"], "stale_obstacles");
   s.fault = FaultKind::kBase;
-  s.base_fault = hal::BaseFault::kEmergencyStop;
-  s.base_fault_code = 0;
+  s.base.fault = hal::BaseFault::kEmergencyStop;
+  s.base.fault_code = 0;
   EXPECT_EQ(statusJson(s, 0)["fault"], std::string("base: ") + hal::toString(hal::BaseFault::kEmergencyStop));
-  s.base_fault = hal::BaseFault::kDriverFault;
-  s.base_fault_code = 0x2310;
+  s.base.fault = hal::BaseFault::kDriverFault;
+  s.base.fault_code = 0x2310;
   EXPECT_EQ(statusJson(s, 0)["fault"], std::string("base: ") + hal::toString(hal::BaseFault::kDriverFault) + " (code 8976)");
 }
 
@@ -315,34 +317,34 @@ TEST(Protocol, MalformedDebugRequestsAreRejectedWithTheFieldAndValue) {
 
 TEST(Protocol, StatusJsonCarriesTheBaseDriversCounters) {
   Status s = filledStatus();
-  s.base_fault = hal::BaseFault::kBusOff;
-  s.base_fault_code = 0;
-  s.base_enabled = true;
-  s.base_bad_frames = 12;
-  s.base_rx_overflows = 3;
-  s.base_error_frames = 2;
+  s.base.fault = hal::BaseFault::kBusOff;
+  s.base.fault_code = 0;
+  s.base.enabled = true;
+  s.base.bad_frames = 12;
+  s.base.rx_overflows = 3;
+  s.base.error_frames = 2;
   const Json base = statusJson(s, 0)["base"];
   EXPECT_EQ(base["fault"], "bus off");
   EXPECT_EQ(base["enabled"], true);
   EXPECT_EQ(base["bad_frames"], 12);
   EXPECT_EQ(base["rx_overflows"], 3);
   EXPECT_EQ(base["error_frames"], 2);
-  s.base_fault = hal::BaseFault::kNone;
+  s.base.fault = hal::BaseFault::kNone;
   EXPECT_TRUE(statusJson(s, 0)["base"]["fault"].is_null());
 }
 
 TEST(Protocol, StatusJsonCarriesTheBaseThreadsTimingAndCommandToWire) {
   Status s = filledStatus();
-  s.base_thread.cycles = 5000;
-  s.base_thread.exec_p50_us = 41.0;
-  s.base_thread.exec_max_us = 310.0;
-  s.base_thread.wake_p99_us = 77.0;
-  s.base_thread.overruns = 2;
-  s.base_thread.late_wakeups = 1;
+  s.base_thread.counters.cycles = 5000;
+  s.base_thread.execution.p50_us = 41.0;
+  s.base_thread.execution.max_us = 310.0;
+  s.base_thread.wake.p99_us = 77.0;
+  s.base_thread.counters.overruns = 2;
+  s.base_thread.counters.late_wakeups = 1;
   s.base_thread.realtime = true;
-  s.command_to_wire.count = 900;
+  s.command_to_wire.latency.count = 900;
   s.command_to_wire.unsent = 4;
-  s.command_to_wire.p99_us = 2500.0;
+  s.command_to_wire.latency.p99_us = 2500.0;
   const Json j = Json::parse(statusReply(s, 0))["status"];
   const Json& thread = j["threads"]["base"];
   EXPECT_EQ(thread["cycle"]["count"], 5000);
@@ -356,7 +358,7 @@ TEST(Protocol, StatusJsonCarriesTheBaseThreadsTimingAndCommandToWire) {
   EXPECT_EQ(wire["count"], 900);
   EXPECT_EQ(wire["unsent"], 4);
   EXPECT_EQ(wire["p99_us"], 2500.0);
-  EXPECT_EQ(j["base"]["bad_frames"], s.base_bad_frames);  // beside the driver's counters
+  EXPECT_EQ(j["base"]["bad_frames"], s.base.bad_frames);  // beside the driver's counters
 }
 
 TEST(Protocol, NamesOfEnumsAreTheContractSpellings) {

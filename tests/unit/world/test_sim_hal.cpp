@@ -7,7 +7,7 @@
 #include "map/generate.hpp"
 #include "world/world.hpp"
 
-#include "alloc_counter.hpp"
+#include "rt/alloc_count.hpp"
 
 #include <gtest/gtest.h>
 
@@ -529,6 +529,7 @@ TEST(SimHal, BaseAndPerceptionThreadsShareOnlyWholeFrames) {
 }
 
 TEST(SimHal, ReadWriteAndObstacleReadsAllocateNothingAfterWarmUp) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_sim_hal must link staa_rt_alloc_hook";
   const PolygonMap office = generatePaperMap("office", 1);
   SimHalConfig c = officeConfig(3);
   SimHal hal(office, paperAgentProfile(), c, 0);
@@ -548,7 +549,7 @@ TEST(SimHal, ReadWriteAndObstacleReadsAllocateNothingAfterWarmUp) {
   for (int k = 0; k < 20; ++k) cycle(k);
   std::size_t allocations = 0;
   for (int k = 20; k < 1020; ++k) {
-    test::AllocationScope scope;
+    rt::AllocationScope scope;
     cycle(k);
     allocations += scope.count();
   }
@@ -560,6 +561,7 @@ TEST(SimHal, ReadWriteAndObstacleReadsAllocateNothingAfterWarmUp) {
 // sized at construction, so not even the first step that brings a mover near allocates (the
 // daemon once counted 1 real-time allocation there, the first time a person came close).
 TEST(SimHal, WorldStepsAllocateNothingFromTheFirstOneEvenWhenAMoverComesNear) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_sim_hal must link staa_rt_alloc_hook";
   const Polygon square{{-0.25, -0.25}, {0.25, -0.25}, {0.25, 0.25}, {-0.25, 0.25}};
   const Mover mover{square, {{12.0, 0.0}, {1.0, 0.0}}, 1.0};  // starts far, walks up to the robot
   PolygonMap map;
@@ -569,7 +571,7 @@ TEST(SimHal, WorldStepsAllocateNothingFromTheFirstOneEvenWhenAMoverComesNear) {
   std::size_t allocations = 0;
   double nearest = 1e9;
   for (int k = 0; k < 400; ++k) {  // 13 s: the mover arrives after ~10.5 s
-    test::AllocationScope scope;
+    rt::AllocationScope scope;
     world.step(1.0 / 30.0, 0.0, 0.0);
     allocations += scope.count();
     nearest = std::min(nearest, (world.moverPosition(0) - world.robot().pose.position()).norm());

@@ -1,0 +1,199 @@
+// The periodic activity on an injected clock: its thread wakes only when the test lets it
+// (GatedClock), so every deadline, every step's time and every counter is exact, while the
+// activity runs on its own thread as it does in the daemon.
+#include "rt/activity.hpp"
+#include "rt/alloc_count.hpp"
+
+#include <gtest/gtest.h>
+
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+namespace staa::rt {
+namespace {
+
+constexpr Nanos kMs = kNanosPerMilli;
+constexpr Nanos kPeriod = 10 * kMs;
+constexpr Nanos kT0 = 7 * kNanosPerSecond;  // an arbitrary clock origin, not 0
+
+// A lockstep clock whose sleepUntil blocks until the test grants a wake-up, then jumps time
+// to the deadline (as ManualClock does). Without a CPU clock: a body's execution is what it
+// advanced the time by, and one longer than a period is an execution overrun.
+class GatedClock final : public Clock {
+ public:
+  explicit GatedClock(Nanos start) : now_(start) {}
+
+  Nanos now() const override {
+    std::lock_guard lock(mutex_);
+    return now_;
+  }
+  int sleepUntil(Nanos deadline) override {
+    std::unique_lock lock(mutex_);
+    ++sleeps_;
+    cv_.notify_all();
+    cv_.wait(lock, [&] { return open_ || grants_ > 0; });
+    if (!open_) --grants_;
+    if (now_ < deadline) now_ = deadline;
+    return 0;
+  }
+  void advance(Nanos d) {
+    std::lock_guard lock(mutex_);
+    now_ += d;
+  }
+  // Lets `n` more sleeps end.
+  void grant(int n) {
+    std::lock_guard lock(mutex_);
+    grants_ += n;
+    cv_.notify_all();
+  }
+  // Every sleep from now on ends at once.
+  void open() {
+    std::lock_guard lock(mutex_);
+    open_ = true;
+    cv_.notify_all();
+  }
+  // Blocks until the sleeper has begun its `n`-th sleep.
+  void awaitSleeps(int n) {
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [&] { return sleeps_ >= n; });
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  Nanos now_;
+  int grants_ = 0;
+  int sleeps_ = 0;
+  bool open_ = false;
+};
+
+// Records what the activity did with it, from the activity's thread.
+class Recorder final : public Runnable {
+ public:
+  explicit Recorder(GatedClock& clock) : clock_(clock) {}
+
+  void start(const PeriodicLoop& loop) override {
+    started_on = std::this_thread::get_id();
+    loop_period = loop.period();
+    realtime_at_start = isRealtimeThread();
+  }
+  void step(Nanos now) override {
+    steps.push_back(now);
+    realtime_in_step = isRealtimeThread();
+    if (steps.size() == 3) clock_.advance(25 * kMs);  // the third cycle runs past two deadlines
+  }
+  void stop(Nanos now) override {
+    stopped_at = now;
+    stopped_on = std::this_thread::get_id();
+  }
+
+  std::thread::id started_on;
+  std::thread::id stopped_on;
+  Nanos loop_period = 0;
+  bool realtime_at_start = true;
+  bool realtime_in_step = false;
+  std::vector<Nanos> steps;  // reserved by the test: no allocation in a step
+  Nanos stopped_at = -1;
+
+ private:
+  GatedClock& clock_;
+};
+
+ThreadSpec normalThread() {
+  ThreadSpec spec;
+  spec.name = "test-activity";
+  spec.priority = 0;  // normal scheduling: the test runs anywhere
+  spec.stack_bytes = 64 * 1024;
+  return spec;
+}
+
+TEST(PeriodicActivity, StepsTheRunnableOnItsThreadOnEveryDeadlineAndSkipsMissedOnes) {
+  GatedClock clock(kT0);
+  Recorder recorder(clock);
+  recorder.steps.reserve(16);
+  PeriodicActivity activity("test", recorder, clock, kPeriod, 1000);
+  EXPECT_FALSE(activity.started());
+  activity.start(normalThread());
+  EXPECT_TRUE(activity.running());
+  EXPECT_FALSE(activity.realtime());
+  clock.awaitSleeps(1);
+  ASSERT_TRUE(activity.started());
+  EXPECT_NE(recorder.started_on, std::this_thread::get_id());
+  EXPECT_EQ(recorder.loop_period, kPeriod);
+  EXPECT_FALSE(recorder.realtime_at_start);  // start() may allocate: not yet real-time
+  EXPECT_EQ(activity.counters().cycles, 0u);
+
+  clock.grant(5);
+  clock.awaitSleeps(6);  // five cycles done, the sixth waiting
+  // Deadline k is start + k * period (start = the clock at start-up + a period); the third
+  // cycle ended at start + 4.5 periods, past deadlines 3 and 4, so the fourth woke on 5.
+  const Nanos start = kT0 + kPeriod;
+  const std::vector<Nanos> expected = {start, start + kPeriod, start + 2 * kPeriod, start + 5 * kPeriod,
+                                       start + 6 * kPeriod};
+  EXPECT_EQ(recorder.steps, expected);
+  EXPECT_TRUE(recorder.realtime_in_step);
+
+  // The status's `threads.base`: the counters as the activity's thread last published them.
+  const PeriodicCounters c = activity.counters();
+  EXPECT_EQ(c.cycles, 5u);
+  EXPECT_EQ(c.overruns, 1u);
+  EXPECT_EQ(c.execution_overruns, 1u);
+  EXPECT_EQ(c.late_wakeups, 0u);
+  EXPECT_EQ(c.skipped_periods, 2u);
+  const ActivityTiming t = activity.timing();
+  EXPECT_EQ(t.counters.overruns, 1u);
+  EXPECT_EQ(t.execution.count, 5u);
+  EXPECT_EQ(t.execution.max_us, 25'000.0);
+  EXPECT_EQ(t.wake.count, 5u);
+  EXPECT_EQ(t.wake.max_us, 0.0);
+  EXPECT_FALSE(t.realtime);
+
+  // A stop asked while the thread sleeps takes effect after that cycle: one more step, then
+  // Runnable::stop on the same thread.
+  activity.requestStop();
+  clock.open();
+  activity.stop();
+  EXPECT_FALSE(activity.running());
+  ASSERT_EQ(recorder.steps.size(), 6u);
+  EXPECT_EQ(recorder.steps.back(), start + 7 * kPeriod);
+  EXPECT_EQ(recorder.stopped_at, start + 7 * kPeriod);
+  EXPECT_EQ(recorder.stopped_on, recorder.started_on);
+  EXPECT_EQ(activity.counters().cycles, 6u);  // still readable after the thread ended
+}
+
+TEST(PeriodicActivity, ARunnableIsSteppedInLockstepWithoutAnActivity) {
+  GatedClock clock(kT0);
+  Recorder recorder(clock);
+  for (Nanos now = 0; now < 4 * kPeriod; now += kPeriod) recorder.step(now);
+  recorder.stop(4 * kPeriod);
+  EXPECT_EQ(recorder.steps, (std::vector<Nanos>{0, kPeriod, 2 * kPeriod, 3 * kPeriod}));
+  EXPECT_EQ(recorder.stopped_on, std::this_thread::get_id());
+}
+
+TEST(PeriodicActivity, RefusesAPeriodThatIsNotPositive) {
+  GatedClock clock(kT0);
+  Recorder recorder(clock);
+  try {
+    PeriodicActivity activity("control", recorder, clock, 0);
+    FAIL() << "a period of 0 was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "activity control: period must be > 0 ns, got 0 ns");
+  }
+}
+
+TEST(PeriodicActivity, StoppingAnActivityThatNeverStartedIsANoOp) {
+  GatedClock clock(kT0);
+  Recorder recorder(clock);
+  PeriodicActivity activity("idle", recorder, clock, kPeriod);
+  activity.stop();
+  EXPECT_FALSE(activity.running());
+  EXPECT_EQ(activity.timing().counters.cycles, 0u);
+  EXPECT_EQ(recorder.stopped_at, -1);
+}
+
+}  // namespace
+}  // namespace staa::rt
