@@ -53,7 +53,8 @@ StaaConfig staaFor(StaaConfig c, double inflation, double dynamic_inflation, dou
 }
 }  // namespace
 
-ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, const ControlConfig& config)
+ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, const ControlConfig& config,
+                           ClockFn clock)
     : config_(checked(config)),
       robot_(robot),
       inflation_(inflationFor(config, robot)),
@@ -65,6 +66,8 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
       local_(config.local),
       staa_(staaFor(config.staa, inflation_, dynamic_inflation_, local_inflation_ + config.path.arc_tolerance_m), robot,
             local_obstacles_, config.local, config.max_moving_obstacles),
+      controller_(&staa_),
+      clock_(clock),
       empty_obstacles_(1),
       inflated_(config.max_moving_obstacles),
       views_(config.max_moving_obstacles) {
@@ -96,24 +99,39 @@ CycleOutput ControlCycle::stop(const UnicycleState& robot, CycleState state) {
   return out;
 }
 
+CycleOutput ControlCycle::command(const LocalCommand& cmd, CycleState state) const {
+  const MotionLimits& lim = robot_.limits;
+  CycleOutput out;
+  out.v_cmd = std::clamp(cmd.v, lim.v_min, lim.v_max);
+  out.w_cmd = std::clamp(cmd.w, -lim.w_max, lim.w_max);
+  out.state = state;
+  return out;
+}
+
+LocalContext ControlCycle::context(const UnicycleState& robot, std::span<const Vec2> route,
+                                   const DynamicObstacleSet& obstacles, const Pose2& goal, PlannerBudget budget) const {
+  LocalContext ctx;
+  ctx.robot = robot;
+  ctx.map = &local_;
+  ctx.path = route;
+  ctx.obstacles = &obstacles;
+  ctx.goal = goal;
+  ctx.period_s = 1.0 / config_.rate_hz;
+  ctx.budget = budget;
+  return ctx;
+}
+
 CycleOutput ControlCycle::safeStop(const UnicycleState& robot, const DynamicObstacleSet& obstacles, const Pose2& goal,
                                    CycleState state) {
   constexpr double kMoving = 1e-3;
-  if (baseline_ != nullptr || !config_.staa.brake_safety || (std::abs(robot.v) < kMoving && std::abs(robot.w) < kMoving)) {
+  if (!controller_->hasSafeStop() || (std::abs(robot.v) < kMoving && std::abs(robot.w) < kMoving)) {
     return stop(robot, state);
   }
   // The local map around the robot (a path straight to the goal only places G~; the stop
   // needs the obstacles).
   const std::array<Vec2, 2> line{robot.position(), goal.position()};
   local_.update(robot.pose(), path_.realObstacleSet(), line, goal.theta);
-  const Action a = staa_.safeStop(robot, local_, obstacles);
-  const double period = 1.0 / config_.rate_hz;
-  const MotionLimits& lim = robot_.limits;
-  CycleOutput out;
-  out.v_cmd = std::clamp(robot.v + a.a * period, lim.v_min, lim.v_max);
-  out.w_cmd = std::clamp(robot.w + a.b * period, -lim.w_max, lim.w_max);
-  out.state = state;
-  return out;
+  return command(controller_->safeStop(context(robot, {}, obstacles, goal, PlannerBudget{})), state);
 }
 
 CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) {
@@ -141,7 +159,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
 
   CycleOutput out;
   // 1. Global path, around the inflated moving obstacles where possible.
-  std::int64_t t0 = steadyClockNs();
+  std::int64_t t0 = clock_();
   const std::size_t n = std::min(obstacles.size(), views_.size());
   out.obstacles_dropped = obstacles.dropped() + (obstacles.size() - n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -150,7 +168,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   }
   const GlobalPath path = n > 0 ? path_.plan(robot.position(), goal.position(), std::span<const PolygonView>(views_.data(), n), deadline)
                                 : path_.plan(robot.position(), goal.position(), deadline);
-  out.path_ns = steadyClockNs() - t0;
+  out.path_ns = clock_() - t0;
   out.path_status = path.status;
   out.path_dynamic = path.dynamic;
   out.path_length = path.length;
@@ -185,40 +203,22 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   last_path_ = route;
 
   // 2. Local map and the intermediate goal.
-  t0 = steadyClockNs();
+  t0 = clock_();
   local_.update(robot.pose(), path_.realObstacleSet(), route, goal.theta);
-  out.local_ns = steadyClockNs() - t0;
+  out.local_ns = clock_() - t0;
 
-  // 3'. A baseline instead of STAA* (PD, DWA): it gives the command directly.
-  if (baseline_ != nullptr) {
-    t0 = steadyClockNs();
-    LocalContext ctx;
-    ctx.robot = robot;
-    ctx.map = &local_;
-    ctx.path = route;
-    ctx.obstacles = &obstacles;
-    ctx.goal = goal;
-    ctx.period_s = 1.0 / config_.rate_hz;
-    const LocalCommand cmd = baseline_->compute(ctx);
-    out.plan_ns = steadyClockNs() - t0;
-    const MotionLimits& lim = robot_.limits;
-    out.v_cmd = std::clamp(cmd.v, lim.v_min, lim.v_max);
-    out.w_cmd = std::clamp(cmd.w, -lim.w_max, lim.w_max);
-    out.state = state_ = CycleState::kDriving;
-    return out;
+  // 3. The local controller (STAA* unless a baseline replaced it), and 4. its command for
+  // the next cycle.
+  t0 = clock_();
+  const LocalCommand cmd = controller_->compute(context(robot, route, obstacles, goal, budget));
+  out.plan_ns = clock_() - t0;
+  const CycleOutput commanded = command(cmd, CycleState::kDriving);
+  out.v_cmd = commanded.v_cmd;
+  out.w_cmd = commanded.w_cmd;
+  if (cmd.plan != nullptr) {
+    out.plan = *cmd.plan;
+    out.planned = true;
   }
-
-  // 3. STAA*.
-  t0 = steadyClockNs();
-  out.plan = staa_.plan(robot, local_, obstacles, budget);
-  out.plan_ns = steadyClockNs() - t0;
-  out.planned = true;
-
-  // 4. The first action, held for one control period, gives the next velocity command.
-  const double period = 1.0 / config_.rate_hz;
-  const MotionLimits& lim = robot_.limits;
-  out.v_cmd = std::clamp(robot.v + out.plan.first_action.a * period, lim.v_min, lim.v_max);
-  out.w_cmd = std::clamp(robot.w + out.plan.first_action.b * period, -lim.w_max, lim.w_max);
   out.state = state_ = CycleState::kDriving;
   return out;
 }

@@ -5,12 +5,16 @@
 //
 //   1. global path in M' ∪ D' (static fallback)             src/path
 //   2. local map: box, G~, collision grid C, costmap C'       src/local
-//   3. STAA* from the robot's state to G~                    src/planner
+//   3. the local controller (STAA*, or a baseline) to G~     src/planner, here
 //   4. the velocity command for the next cycle               here
+//
+// The phases are timed on the clock given at construction (the daemon's monotonic clock, a
+// test's manual one).
 //
 // Everything is sized at construction; step() allocates nothing.
 
 #include "control/local_controller.hpp"
+#include "control/staa_controller.hpp"
 #include "robot/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
@@ -81,8 +85,8 @@ struct CycleOutput {
   bool path_dynamic = false;
   bool path_held = false;  // the query failed (path_status says why): the last path was followed
   double path_length = 0.0;
-  PlanResult plan;
-  bool planned = false;  // false when no STAA* ran (idle, reached, unreachable)
+  PlanResult plan;       // the search's result when the local controller searched (STAA*)
+  bool planned = false;  // false when no search ran (idle, reached, unreachable, a baseline)
   std::int64_t path_ns = 0;
   std::int64_t local_ns = 0;
   std::int64_t plan_ns = 0;
@@ -91,7 +95,8 @@ struct CycleOutput {
 
 class ControlCycle {
  public:
-  ControlCycle(const PolygonMap& map, const RobotProfile& robot, const ControlConfig& config);
+  ControlCycle(const PolygonMap& map, const RobotProfile& robot, const ControlConfig& config,
+               ClockFn clock = &steadyClockNs);
 
   void setGoal(const Pose2& goal);
   void clearGoal();
@@ -102,10 +107,12 @@ class ControlCycle {
   const LocalMap& localMap() const { return local_; }
   const GlobalPathPlanner& pathPlanner() const { return path_; }
   std::span<const Vec2> lastPath() const { return last_path_; }
-  StaaStar& planner() { return staa_; }
-  // Replaces STAA* by another local controller (the paper's baselines); null restores STAA*.
-  // The controller must outlive the cycle.
-  void setLocalController(LocalController* controller) { baseline_ = controller; }
+  // STAA*, the default local controller (also while another one runs).
+  StaaStar& planner() { return staa_.planner(); }
+  // The local controller the cycle runs: STAA* unless replaced (the paper's baselines); null
+  // restores STAA*. The controller must outlive the cycle.
+  void setLocalController(LocalController* controller) { controller_ = controller != nullptr ? controller : &staa_; }
+  const LocalController& localController() const { return *controller_; }
 
   const ControlConfig& config() const { return config_; }
   std::size_t obstacleCapacity() const { return config_.max_moving_obstacles; }
@@ -115,10 +122,15 @@ class ControlCycle {
 
  private:
   CycleOutput stop(const UnicycleState& robot, CycleState state);
-  // Stopping from speed without a path: STAA*'s safe stop on this cycle's local map.
+  // Stopping from speed without a path: the local controller's safe stop on this cycle's
+  // local map, or the brake at the limits.
   CycleOutput safeStop(const UnicycleState& robot, const DynamicObstacleSet& obstacles, const Pose2& goal,
                        CycleState state);
   static GlobalPathOptions pathOptions(const ControlConfig& config, double inflation);
+  // The command clamped to the robot's limits.
+  CycleOutput command(const LocalCommand& cmd, CycleState state) const;
+  LocalContext context(const UnicycleState& robot, std::span<const Vec2> route,
+                       const DynamicObstacleSet& obstacles, const Pose2& goal, PlannerBudget budget) const;
 
   ControlConfig config_;
   RobotProfile robot_;
@@ -128,7 +140,9 @@ class ControlCycle {
   GlobalPathPlanner path_;
   std::vector<Polygon> local_obstacles_;  // L: the real obstacles grown by local_inflation_
   LocalMap local_;
-  StaaStar staa_;
+  StaaController staa_;
+  LocalController* controller_;  // &staa_ or a baseline
+  ClockFn clock_;
   DynamicObstacleSet empty_obstacles_;
   std::optional<Pose2> goal_;
   CycleState state_ = CycleState::kIdle;
@@ -140,7 +154,6 @@ class ControlCycle {
   std::vector<Vec2> held_path_;
   bool held_valid_ = false;
   int path_misses_ = 0;
-  LocalController* baseline_ = nullptr;
 };
 
 }  // namespace staa

@@ -1,15 +1,16 @@
 #pragma once
-// The step of the control cycle that turns the local picture into a velocity command, as an
-// interface, so that the paper's baselines (a PD controller with a force field, a predictive
-// Dynamic Window Approach) run in the same cycle as STAA*: same global path, same local map,
-// same moving obstacles, same robot limits. STAA* itself stays a concrete member of the cycle
-// (it has its own budget and statistics).
+// The step of the control cycle that turns the local picture into a velocity command, as one
+// interface for STAA* (StaaController) and the paper's baselines (a PD controller with a
+// force field, a predictive Dynamic Window Approach): the cycle runs "the local controller"
+// with the same global path, local map, moving obstacles, robot limits and budget for each.
 //
-// compute() runs in the 30 Hz cycle: it must not allocate, lock or block.
+// compute() and safeStop() run in the 30 Hz cycle: they must not allocate, lock or block.
 
-#include "robot/robot_profile.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "local/local_map.hpp"
+#include "planner/budget.hpp"
+#include "planner/staa_star.hpp"
+#include "robot/robot_profile.hpp"
 #include "robot/unicycle.hpp"
 
 #include <span>
@@ -23,11 +24,15 @@ struct LocalContext {
   const DynamicObstacleSet* obstacles = nullptr;  // D now, with velocities
   Pose2 goal;                           // the final goal
   double period_s = 1.0 / 30.0;         // until the next cycle
+  PlannerBudget budget;                 // the cycle's budget, already started
 };
 
 struct LocalCommand {
-  double v = 0.0;  // velocity command for the next cycle, within the limits
+  double v = 0.0;  // velocity command for the next cycle (the cycle clamps it to the limits)
   double w = 0.0;
+  // The search behind the command, for controllers that search (STAA*): valid until the next
+  // compute(); null for the others.
+  const PlanResult* plan = nullptr;
 };
 
 class LocalController {
@@ -35,6 +40,11 @@ class LocalController {
   virtual ~LocalController() = default;
   virtual const char* name() const = 0;
   virtual LocalCommand compute(const LocalContext& context) = 0;
+  // Whether the controller has a stop of its own for a moving robot without a route (no path,
+  // or out of time); when not, the cycle brakes at the limits.
+  virtual bool hasSafeStop() const { return false; }
+  // That stop, on a local map updated around the robot (context.path is empty).
+  virtual LocalCommand safeStop(const LocalContext& context) { return {context.robot.v, context.robot.w, nullptr}; }
 };
 
 }  // namespace staa

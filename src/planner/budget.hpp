@@ -54,6 +54,7 @@ class PlannerBudget {
   Kind kind() const { return kind_; }
   std::uint32_t maxPops() const { return max_pops_; }
   std::int64_t limitNs() const { return limit_ns_; }
+  ClockFn clock() const { return clock_; }
 
  private:
   Kind kind_ = Kind::kExpansions;

@@ -191,12 +191,8 @@ Action StaaStar::safeStop(const UnicycleState& start, const LocalMap& map, const
   return actions_[best];
 }
 
-PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
-                          PlannerBudget budget) {
-  PlanResult result;
-  PlanStats& st = result.stats;
-  const std::int64_t t_begin = timing_ ? steadyClockNs() : 0;
-  budget.start();
+void StaaStar::beginSearch(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
+                           const Deadline& deadline) {
   map_ = &map;
   box_x_ = map.origin().x;
   box_y_ = map.origin().y;
@@ -205,7 +201,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   box_behind_ = map.config().behind_m;
   box_side_ = map.config().side_m;
   collision_.prepare(map);
-  heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map, &collision_, budget.deadline());
+  heuristic_.prepare(map.intermediateGoal().pose, obstacles, config_.dt, map, &collision_, deadline);
   nodes_.clear();
   queue_.clear();
   trajectory_.clear();
@@ -213,142 +209,123 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     std::fill(closed_.begin(), closed_.end(), 0);
     generation_ = 1;
   }
-
   Node root;
   root.s = start;
   root.h = heuristic_.evaluate(start, 0);
   root.f = root.h;
   nodes_.push_back(root);
   push(0);
-  std::int32_t best = 0;
-  result.outcome = PlanResult::Outcome::kExhausted;
+}
 
-  // Braking safety of the first actions (see StaaConfig::brake_safety): only the actions of
-  // the strictest tier that any action reaches are allowed; the least bad ones when none passes.
-  if (config_.brake_safety) {
-    braking_obstacles_.copyFrom(obstacles);
-    result.brake_safety_tier = markBrakeSafe(start, obstacles);
-    std::size_t allowed = 0;
-    for (std::size_t a = 0; a < actions_.size(); ++a) allowed += root_allowed_[a] ? 1 : 0;
-    result.brake_safe_actions = static_cast<std::uint32_t>(allowed);
+void StaaStar::restrictRoot(const UnicycleState& start, const DynamicObstacleSet& obstacles, PlanResult& result) {
+  braking_obstacles_.copyFrom(obstacles);
+  result.brake_safety_tier = markBrakeSafe(start, obstacles);
+  std::size_t allowed = 0;
+  for (std::size_t a = 0; a < actions_.size(); ++a) allowed += root_allowed_[a] ? 1 : 0;
+  result.brake_safe_actions = static_cast<std::uint32_t>(allowed);
+}
+
+void StaaStar::evaluateLazily(std::int32_t id, std::int32_t& best, PlanStats& st) {
+  Node& n = nodes_[static_cast<std::size_t>(id)];
+  const std::int64_t th = now();
+  n.h = heuristic_.evaluate(n.s, n.depth);
+  if (timing_) st.heuristic_ns += now() - th;
+  ++st.heuristic_calls;
+  n.f = n.g + n.h;
+  n.evaluated = true;
+  if (n.h < nodes_[static_cast<std::size_t>(best)].h) best = id;
+  push(id);
+}
+
+void StaaStar::rotationsFor(const UnicycleState& s) {
+  for (std::size_t j = 0; j < actions_.notches(); ++j) {
+    const ArcVelocities av = arcVelocities(s, actions_[j], config_.dt, limits_);
+    rot_w_end_[j] = av.w_end;
+    rot_w_mid_[j] = av.w_mid;
+    sinCos(av.w_mid * config_.dt, rot_c_[j], rot_s_[j]);
   }
-  const bool restrict_root = config_.brake_safety;
+}
 
-  while (!queue_.empty()) {
-    // Checked on every pop (paper, Sec. III-E-6).
-    if (budget.exhausted(st.pops)) {
-      result.outcome = PlanResult::Outcome::kAborted;
-      break;
-    }
-    const std::int32_t id = pop();
-    std::size_t cell = 0;
-    const bool in_box = closedIndex(nodes_[static_cast<std::size_t>(id)].s.x, nodes_[static_cast<std::size_t>(id)].s.y,
-                                    nodes_[static_cast<std::size_t>(id)].s.theta, cell);
-    if (config_.lazy_heuristic && !nodes_[static_cast<std::size_t>(id)].evaluated) {
-      // Lazy evaluation: the state was queued under a lower bound of h. A state whose cell is
-      // closed meanwhile is dropped unevaluated; otherwise its true h is computed now and it
-      // goes back into the queue under its true f (not counted as a pop: the paper's pop is
-      // the one that closes or drops it).
-      if (in_box && closed_[cell] == generation_) {
-        ++st.pops;
-        continue;
-      }
-      Node& n = nodes_[static_cast<std::size_t>(id)];
-      const std::int64_t th = timing_ ? steadyClockNs() : 0;
-      n.h = heuristic_.evaluate(n.s, n.depth);
-      if (timing_) st.heuristic_ns += steadyClockNs() - th;
-      ++st.heuristic_calls;
-      n.f = n.g + n.h;
-      n.evaluated = true;
-      if (n.h < nodes_[static_cast<std::size_t>(best)].h) best = id;
-      push(id);
+bool StaaStar::motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
+                          const DynamicObstacleSet& obstacles, bool predict, PlanStats& st) const {
+  const double t0 = node.depth * config_.dt;
+  const std::int64_t tc = now();
+  bool free = config_.check_swept ? collision_.motionFreeStatic(motion)
+                                  : collision_.fastPoseFreeStatic({motion.x1, motion.y1, motion.c1, motion.s1});
+  if (free && predict) {
+    const Pose2 end{motion.x1, motion.y1, motion.theta1};
+    free = config_.check_swept ? collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0)
+                               : collision_.poseFreeDynamic(end, obstacles, t0 + config_.dt);
+  }
+  if (timing_) st.collision_ns += now() - tc;
+  return free;
+}
+
+double StaaStar::pathCost(const UnicycleState& child, int depth, const DynamicObstacleSet& obstacles,
+                          bool predict) const {
+  // Eq. (3): time, costmap at the state, proximity to the predicted obstacles.
+  const double t = depth * config_.dt;
+  double g = t + config_.w_static * map_->cost(child.position());
+  if (predict && obstacles.size() > 0) {
+    const double dist = collision_.distanceToDynamic(child.position(), obstacles, t);
+    g += config_.w_dynamic * std::max(1.0 - dist / config_.proximity_range_m, 0.0);
+  }
+  return g;
+}
+
+void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st) {
+  ++st.expansions;
+  const Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool is appended below
+  const int depth = node.depth + 1;
+  const bool predict = depth <= config_.prediction_depth;
+  const bool restrict_root = config_.brake_safety && id == 0;
+  // Per expansion, the trigonometry of the 7 x 7 actions: the heading's cosine and sine once,
+  // and one rotation per angular acceleration (the linear ones do not rotate).
+  const std::size_t notches = actions_.notches();
+  const double c0 = std::cos(node.s.theta), s0 = std::sin(node.s.theta);
+  rotationsFor(node.s);
+  for (std::size_t a = 0; a < actions_.size(); ++a) {
+    ++st.successors;
+    if (restrict_root && !root_allowed_[a]) {
+      ++st.collisions;  // could not brake safely after it
       continue;
     }
-    ++st.pops;
-    const Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool may be appended below
-    if (in_box) {
-      if (closed_[cell] == generation_) continue;  // its cell was closed by an earlier pop
-      closed_[cell] = generation_;
+    const std::size_t j = a % notches;  // actions are ordered (a index) * notches + (b index)
+    const ArcVelocities vel = arcVelocities(node.s, actions_[a], config_.dt, limits_);
+    const ArcMotion motion = makeArcMotion(node.s, c0, s0, vel.v_mid, rot_w_mid_[j], config_.dt, rot_c_[j], rot_s_[j]);
+    const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, rot_w_end_[j]};
+    std::size_t child_cell = 0;
+    if (!closedIndex(child.x, child.y, child.theta, child_cell)) continue;  // outside the local map
+    if (closed_[child_cell] == generation_) continue;                        // checked on push too
+    if (!motionFree(node, motion, vel, obstacles, predict, st)) {
+      ++st.collisions;
+      continue;
     }
-    if (node.h < config_.finish_h) {
-      best = id;
-      result.outcome = PlanResult::Outcome::kFinished;
-      break;
+    if (nodes_.size() == nodes_.capacity()) break;  // pool full: no more pushes
+    Node c;
+    c.evaluated = !config_.lazy_heuristic;
+    c.s = child;
+    c.g = pathCost(child, depth, obstacles, predict);
+    if (config_.lazy_heuristic) {
+      c.h = heuristic_.lowerBound(child);  // the true h when the state is popped
+    } else {
+      const std::int64_t th = now();
+      c.h = heuristic_.evaluate(child, depth);
+      if (timing_) st.heuristic_ns += now() - th;
+      ++st.heuristic_calls;
     }
-    ++st.expansions;
-    const int depth = node.depth + 1;
-    const double t0 = node.depth * config_.dt;
-    const bool predict = depth <= config_.prediction_depth;
-    // Per expansion, the trigonometry of the 7 x 7 actions: the heading's cosine and sine once,
-    // and one rotation per angular acceleration (the linear ones do not rotate).
-    const std::size_t notches = actions_.notches();
-    const double c0 = std::cos(node.s.theta), s0 = std::sin(node.s.theta);
-    for (std::size_t j = 0; j < notches; ++j) {
-      const ArcVelocities av = arcVelocities(node.s, actions_[j], config_.dt, limits_);
-      rot_w_end_[j] = av.w_end;
-      rot_w_mid_[j] = av.w_mid;
-      sinCos(av.w_mid * config_.dt, rot_c_[j], rot_s_[j]);
-    }
-    for (std::size_t a = 0; a < actions_.size(); ++a) {
-      ++st.successors;
-      if (restrict_root && id == 0 && !root_allowed_[a]) {
-        ++st.collisions;  // could not brake safely after it
-        continue;
-      }
-      const std::size_t j = a % notches;  // actions are ordered (a index) * notches + (b index)
-      const ArcVelocities vel = arcVelocities(node.s, actions_[a], config_.dt, limits_);
-      const ArcMotion motion =
-          makeArcMotion(node.s, c0, s0, vel.v_mid, rot_w_mid_[j], config_.dt, rot_c_[j], rot_s_[j]);
-      const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, rot_w_end_[j]};
-      const Pose2 end{motion.x1, motion.y1, motion.theta1};
-      std::size_t child_cell = 0;
-      if (!closedIndex(child.x, child.y, child.theta, child_cell)) continue;  // outside the local map
-      if (closed_[child_cell] == generation_) continue;                        // checked on push too
-      const std::int64_t tc = timing_ ? steadyClockNs() : 0;
-      bool free = config_.check_swept ? collision_.motionFreeStatic(motion)
-                                      : collision_.fastPoseFreeStatic({motion.x1, motion.y1, motion.c1, motion.s1});
-      if (free && predict) {
-        free = config_.check_swept ? collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0)
-                                   : collision_.poseFreeDynamic(end, obstacles, t0 + config_.dt);
-      }
-      if (timing_) st.collision_ns += steadyClockNs() - tc;
-      if (!free) {
-        ++st.collisions;
-        continue;
-      }
-      if (nodes_.size() == nodes_.capacity()) break;  // pool full: no more pushes
-      // Eq. (3): time, costmap at the state, proximity to the predicted obstacles.
-      const double t = depth * config_.dt;
-      double g = t + config_.w_static * map.cost(child.position());
-      if (predict && obstacles.size() > 0) {
-        const double dist = collision_.distanceToDynamic(child.position(), obstacles, t);
-        g += config_.w_dynamic * std::max(1.0 - dist / config_.proximity_range_m, 0.0);
-      }
-      double h;
-      if (config_.lazy_heuristic) {
-        h = heuristic_.lowerBound(child);  // the true h when the state is popped
-      } else {
-        const std::int64_t th = timing_ ? steadyClockNs() : 0;
-        h = heuristic_.evaluate(child, depth);
-        if (timing_) st.heuristic_ns += steadyClockNs() - th;
-        ++st.heuristic_calls;
-      }
-      Node c;
-      c.evaluated = !config_.lazy_heuristic;
-      c.s = child;
-      c.g = g;
-      c.h = h;
-      c.f = g + h;
-      c.parent = id;
-      c.depth = static_cast<std::uint16_t>(depth);
-      c.action = static_cast<std::uint8_t>(a);
-      nodes_.push_back(c);
-      const auto cid = static_cast<std::int32_t>(nodes_.size() - 1);
-      push(cid);
-      if (c.evaluated && h < nodes_[static_cast<std::size_t>(best)].h) best = cid;
-    }
+    c.f = c.g + c.h;
+    c.parent = id;
+    c.depth = static_cast<std::uint16_t>(depth);
+    c.action = static_cast<std::uint8_t>(a);
+    nodes_.push_back(c);
+    const auto cid = static_cast<std::int32_t>(nodes_.size() - 1);
+    push(cid);
+    if (c.evaluated && c.h < nodes_[static_cast<std::size_t>(best)].h) best = cid;
   }
+}
 
+void StaaStar::finish(const UnicycleState& start, std::int32_t best, PlanResult& result) {
   if (best == 0 && result.outcome != PlanResult::Outcome::kFinished) {
     // Nothing beyond the start survived: every motion collides. Brake at the limits (the
     // original only did so near the root; this acts whatever the search saw).
@@ -372,7 +349,58 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
   } else {
     result.first_action = actions_[nodes_[static_cast<std::size_t>(first)].action];
   }
-  if (timing_) st.total_ns = steadyClockNs() - t_begin;
+}
+
+PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
+                          PlannerBudget budget) {
+  PlanResult result;
+  PlanStats& st = result.stats;
+  clock_ = budget.clock();
+  const std::int64_t t_begin = now();
+  budget.start();
+  beginSearch(start, map, obstacles, budget.deadline());
+  std::int32_t best = 0;
+  result.outcome = PlanResult::Outcome::kExhausted;
+  // Braking safety of the first actions (see StaaConfig::brake_safety): only the actions of
+  // the strictest tier that any action reaches are allowed; the least bad ones when none passes.
+  if (config_.brake_safety) restrictRoot(start, obstacles, result);
+
+  while (!queue_.empty()) {
+    // Checked on every pop (paper, Sec. III-E-6).
+    if (budget.exhausted(st.pops)) {
+      result.outcome = PlanResult::Outcome::kAborted;
+      break;
+    }
+    const std::int32_t id = pop();
+    const Node& n = nodes_[static_cast<std::size_t>(id)];
+    std::size_t cell = 0;
+    const bool in_box = closedIndex(n.s.x, n.s.y, n.s.theta, cell);
+    if (config_.lazy_heuristic && !n.evaluated) {
+      // Lazy evaluation: the state was queued under a lower bound of h. A state whose cell is
+      // closed meanwhile is dropped unevaluated; otherwise its true h is computed now and it
+      // goes back into the queue under its true f (not counted as a pop: the paper's pop is
+      // the one that closes or drops it).
+      if (in_box && closed_[cell] == generation_) {
+        ++st.pops;
+      } else {
+        evaluateLazily(id, best, st);
+      }
+      continue;
+    }
+    ++st.pops;
+    if (in_box) {
+      if (closed_[cell] == generation_) continue;  // its cell was closed by an earlier pop
+      closed_[cell] = generation_;
+    }
+    if (n.h < config_.finish_h) {
+      best = id;
+      result.outcome = PlanResult::Outcome::kFinished;
+      break;
+    }
+    expand(id, obstacles, best, st);
+  }
+  finish(start, best, result);
+  if (timing_) st.total_ns = now() - t_begin;
   return result;
 }
 

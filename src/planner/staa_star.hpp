@@ -175,6 +175,21 @@ class StaaStar {
   std::uint8_t markBrakeSafe(const UnicycleState& start, const DynamicObstacleSet& obstacles);
   void push(std::int32_t node);
   std::int32_t pop();
+  // plan()'s steps: the box, collision grid, heuristic and the root; the first actions'
+  // braking check; a lazily queued state's true h; one expansion (its successors, their
+  // rotations, collision check and cost g); the result from the best state.
+  void beginSearch(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
+                   const Deadline& deadline);
+  void restrictRoot(const UnicycleState& start, const DynamicObstacleSet& obstacles, PlanResult& result);
+  void evaluateLazily(std::int32_t id, std::int32_t& best, PlanStats& st);
+  void expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st);
+  void rotationsFor(const UnicycleState& s);
+  bool motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
+                  const DynamicObstacleSet& obstacles, bool predict, PlanStats& st) const;
+  double pathCost(const UnicycleState& child, int depth, const DynamicObstacleSet& obstacles, bool predict) const;
+  void finish(const UnicycleState& start, std::int32_t best, PlanResult& result);
+  // The phase timing's clock reading (the budget's clock), 0 while timing is off.
+  std::int64_t now() const { return timing_ ? clock_() : 0; }
 
   StaaConfig config_;
   MotionLimits limits_;
@@ -202,6 +217,7 @@ class StaaStar {
   std::vector<double> root_clear_;           // brakeClearTime after each first action (0: it collides itself)
   std::vector<std::uint8_t> root_allowed_;   // the first actions the search may take
   bool timing_ = false;
+  ClockFn clock_ = &steadyClockNs;  // the current plan's budget's clock
 };
 
 }  // namespace staa
