@@ -1,30 +1,38 @@
 #include "hal/camera_model.hpp"
 
+#include "geometry/types.hpp"
+#include "io/config_rules.hpp"
+
 #include <Eigen/Geometry>
 
 #include <cmath>
-#include <stdexcept>
-#include <string>
 
 namespace staa {
 namespace {
 
-[[noreturn]] void bad(const std::string& field, double value, const char* rule) {
-  throw std::invalid_argument("camera: " + field + " must be " + rule + ", got " + std::to_string(value));
+constexpr const char* kOwner = "camera";
+
+void require(const char* field, double value, const io::Range& range) { io::requireField(kOwner, field, value, range); }
+
+// Radians: a value beyond pi is most likely degrees.
+void requireAngle(const char* field, double value) {
+  if (!(std::abs(value) <= kPi)) throw io::FieldError(kOwner, field, "in [-pi, pi] rad (degrees? 17 deg is 0.297 rad)", value);
 }
 
 }  // namespace
 
 void validateCamera(const hal::CameraIntrinsics& k, const hal::CameraMount& m) {
-  if (!(k.fx > 0.0) || !std::isfinite(k.fx)) bad("intrinsics.fx", k.fx, "finite and > 0 (pixels)");
-  if (!(k.fy > 0.0) || !std::isfinite(k.fy)) bad("intrinsics.fy", k.fy, "finite and > 0 (pixels)");
-  if (!(k.cx >= 0.0 && k.cx < hal::DepthFrame::kWidth)) bad("intrinsics.cx", k.cx, "in [0, 640) (pixels)");
-  if (!(k.cy >= 0.0 && k.cy < hal::DepthFrame::kHeight)) bad("intrinsics.cy", k.cy, "in [0, 480) (pixels)");
-  const double values[] = {m.x, m.y, m.z, m.roll, m.pitch, m.yaw};
-  const char* names[] = {"mount.x", "mount.y", "mount.z", "mount.roll", "mount.pitch", "mount.yaw"};
-  for (int i = 0; i < 6; ++i) {
-    if (!std::isfinite(values[i])) bad(names[i], values[i], "finite");
-  }
+  using io::Range;
+  require("intrinsics.fx", k.fx, Range::above(0.0, "pixels"));
+  require("intrinsics.fy", k.fy, Range::above(0.0, "pixels"));
+  require("intrinsics.cx", k.cx, Range::rightOpen(0.0, hal::DepthFrame::kWidth, "pixels", "inside the image"));
+  require("intrinsics.cy", k.cy, Range::rightOpen(0.0, hal::DepthFrame::kHeight, "pixels", "inside the image"));
+  require("mount.x", m.x, Range{});
+  require("mount.y", m.y, Range{});
+  require("mount.z", m.z, Range::above(0.0, "m", "above the floor"));
+  requireAngle("mount.roll", m.roll);
+  requireAngle("mount.pitch", m.pitch);
+  requireAngle("mount.yaw", m.yaw);
 }
 
 CameraModel::CameraModel(const hal::CameraIntrinsics& intrinsics, const hal::CameraMount& mount)

@@ -16,8 +16,10 @@ namespace staa {
 
 using Vec3 = Eigen::Vector3d;
 
-// Throws std::invalid_argument naming the field and its value: focal lengths finite and > 0,
-// principal point inside the 640 x 480 image, mount finite.
+// The camera's rules, the one check (the model's constructor and staad's config reader):
+// focal lengths > 0, the principal point inside the 640 x 480 image, the mount finite, above
+// the floor (z > 0) and its angles in [-pi, pi]. Throws io::FieldError (an
+// std::invalid_argument) naming the field ("mount.z"), the rule and the value.
 void validateCamera(const hal::CameraIntrinsics& intrinsics, const hal::CameraMount& mount);
 
 class CameraModel {

@@ -7,9 +7,10 @@
 // The defaults below are the shipped config/can/hsr_base.yaml (a test keeps them equal), so
 // a test can build frames with `CanProfile{}`.
 
+#include "io/config_rules.hpp"
+
 #include <cstdint>
 #include <filesystem>
-#include <stdexcept>
 #include <string>
 
 namespace staa::hal {
@@ -66,9 +67,9 @@ struct CanProfile {
   CanBusProfile bus;
 };
 
-class CanProfileError : public std::runtime_error {
+class CanProfileError : public io::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using io::ConfigError::ConfigError;
 };
 
 // Strict: a missing or unknown key, an unknown format or byte order, an ID above 0x7FF, two

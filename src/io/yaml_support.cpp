@@ -1,17 +1,13 @@
 #include "io/yaml_support.hpp"
 
+#include "io/config_rules.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <limits>
 #include <string_view>
 
 namespace staa::yaml_support {
-
-std::string lineOf(const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  if (mark.line < 0) return "";
-  return " (line " + std::to_string(mark.line + 1) + ")";
-}
 
 std::string describe(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
@@ -32,13 +28,7 @@ std::string describe(const YAML::Node& node) {
   return "a mapping";
 }
 
-std::string formatNumber(double v) {
-  if (std::isnan(v)) return ".nan";
-  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
+std::string formatNumber(double v) { return io::numberText(v); }
 
 std::string formatPoint(const Vec2& p) {
   std::string out = "(";  // appended: GCC 12 warns falsely (-Wrestrict) on chained operator+

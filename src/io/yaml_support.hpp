@@ -1,7 +1,7 @@
 #pragma once
-// What every reader of our YAML files (maps, robot profiles, scenarios, ROS map metadata)
-// needs for exact numbers and clear messages: one strict, locale-free number reader, the
-// shortest round-trip number writer, and the "(line N)" / "got X" parts of error messages.
+// The YAML pieces under the config reader (io/config_reader.hpp) and the map writer: one
+// strict, locale-free number reader, the shortest round-trip number writer, and the "got X"
+// part of error messages.
 
 #include "geometry/types.hpp"
 
@@ -12,8 +12,6 @@
 
 namespace staa::yaml_support {
 
-// " (line N)" for a node that has a position in its file, else "".
-std::string lineOf(const YAML::Node& node);
 // A short, single-line description of what a node holds, for "expected X, got Y" messages.
 std::string describe(const YAML::Node& node);
 // Shortest text that reads back to the same double bit for bit; YAML spellings for .nan/.inf.

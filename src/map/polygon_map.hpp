@@ -2,10 +2,10 @@
 // The static polygon map M (docs/ARCHITECTURE.md section 6, format `staa-polygon-map/1`).
 
 #include "geometry/types.hpp"
+#include "io/config_rules.hpp"
 
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,9 +23,9 @@ struct PolygonMap {
 
 // Raised for unreadable or invalid map files; what() names the file, the polygon's index
 // where one is at fault, and what is wrong. Tools turn it into exit code 2.
-class MapError : public std::runtime_error {
+class MapError : public io::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using io::ConfigError::ConfigError;
 };
 
 // Parses YAML text; `source` names where it came from (a path) for error messages.

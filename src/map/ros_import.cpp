@@ -4,6 +4,9 @@
 
 #include "geometry/clipper_ops.hpp"
 
+#include "io/config_reader.hpp"
+#include "io/yaml_support.hpp"
+
 #include <clipper.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -98,35 +101,45 @@ std::string readFile(const std::filesystem::path& path, const char* what) {
 // ---------------------------------------------------------------------------------------
 // map_server YAML
 
-std::string dump(const YAML::Node& node) {
-  YAML::Emitter out;
-  out.SetMapFormat(YAML::Flow);
-  out.SetSeqFormat(YAML::Flow);
-  out << node;
-  return out.c_str();
-}
+constexpr io::Choice<RosMapInfo::Mode> kModes[] = {
+    {"trinary", RosMapInfo::Mode::kTrinary}, {"scale", RosMapInfo::Mode::kScale}, {"raw", RosMapInfo::Mode::kRaw}};
 
-[[noreturn]] void keyError(const std::string& source, const std::string& key, const std::string& what,
-                           const YAML::Node& value) {
-  throw MapError(source + ": key '" + key + "' " + what + " (got " + dump(value) + ")");
-}
+// map_server's keys (its files are others': keys this reader does not know are left alone).
+// With `image_must_exist` the image file is looked for, named at its key when it is not there.
+RosMapInfo readRosMapInfo(const io::ConfigValue& root, bool image_must_exist) {
+  if (!root.node().IsMap()) root.fail("expected a map_server YAML mapping (image, resolution, origin, ...), got " + root.described());
+  root.anyMapping();
+  RosMapInfo info;
+  const io::ConfigValue image = root.required("image", "the PGM file");
+  info.image = image.path("a file name");
+  if (image_must_exist && !std::filesystem::is_regular_file(info.image)) image.fail("file " + info.image.string() + " not found");
 
-std::optional<double> asNumber(const YAML::Node& node) {
-  if (!node.IsScalar()) return std::nullopt;
-  try {
-    const double v = node.as<double>();
-    if (std::isfinite(v)) return v;
-  } catch (const YAML::Exception&) {
+  info.resolution = root.required("resolution", "metres per pixel").number(io::Range::above(0.0, "m per pixel"));
+  const auto origin = root.required("origin", "[x, y, yaw] of the lower-left pixel").numbers<3>("3 numbers [x, y, yaw]");
+  info.origin = Pose2{origin[0], origin[1], origin[2]};
+
+  if (const io::ConfigValue negate = root.get("negate"); negate.present()) {
+    // map_server writes 0/1; YAML booleans are accepted too.
+    const std::optional<double> n = yaml_support::readNumber(negate.node());
+    if (n && (*n == 0.0 || *n == 1.0)) {
+      info.negate = *n == 1.0;
+    } else if (bool on = false; negate.node().IsScalar() && YAML::convert<bool>::decode(negate.node(), on)) {
+      info.negate = on;
+    } else {
+      negate.fail("must be 0 or 1, got " + negate.text());
+    }
   }
-  return std::nullopt;
-}
-
-double requireNumber(const YAML::Node& root, const std::string& key, const std::string& source) {
-  const YAML::Node node = root[key];
-  if (!node) throw MapError(source + ": missing key '" + key + "'");
-  const std::optional<double> v = asNumber(node);
-  if (!v) keyError(source, key, "must be a finite number", node);
-  return *v;
+  const io::Range fraction = io::Range::closed(0.0, 1.0);
+  const io::ConfigValue occupied = root.get("occupied_thresh");
+  const io::ConfigValue free = root.get("free_thresh");
+  if (occupied.present()) info.occupied_thresh = occupied.number(fraction);
+  if (free.present()) info.free_thresh = free.number(fraction);
+  if (info.free_thresh >= info.occupied_thresh) {
+    if (free.present()) free.failRule("below occupied_thresh (" + yaml_support::formatNumber(info.occupied_thresh) + ")");
+    occupied.failRule("above free_thresh (" + yaml_support::formatNumber(info.free_thresh) + ")");
+  }
+  if (const io::ConfigValue mode = root.get("mode"); mode.present()) info.mode = mode.choice<RosMapInfo::Mode>(kModes);
+  return info;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -396,85 +409,15 @@ PgmImage loadPgm(const std::filesystem::path& path) { return parsePgm(readFile(p
 
 RosMapInfo parseRosMapInfo(const std::string& yaml_text, const std::string& source,
                            const std::filesystem::path& base_dir) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw MapError(source + ": invalid YAML: " + e.what());
-  }
-  if (!root.IsMap()) throw MapError(source + ": expected a map_server YAML mapping (image, resolution, origin, ...)");
-
-  RosMapInfo info;
-  try {
-    const YAML::Node image = root["image"];
-    if (!image) throw MapError(source + ": missing key 'image'");
-    if (!image.IsScalar() || image.Scalar().empty()) keyError(source, "image", "must be a file name", image);
-    info.image = std::filesystem::path(image.Scalar());
-    if (info.image.is_relative()) info.image = base_dir / info.image;
-
-    info.resolution = requireNumber(root, "resolution", source);
-    if (info.resolution <= 0.0) keyError(source, "resolution", "must be positive (metres per pixel)", root["resolution"]);
-
-    const YAML::Node origin = root["origin"];
-    if (!origin) throw MapError(source + ": missing key 'origin'");
-    std::optional<double> o[3];
-    if (origin.IsSequence() && origin.size() == 3) {
-      for (std::size_t i = 0; i < 3; ++i) o[i] = asNumber(origin[i]);
-    }
-    if (!o[0] || !o[1] || !o[2]) keyError(source, "origin", "must be 3 numbers [x, y, yaw]", origin);
-    info.origin = Pose2{*o[0], *o[1], *o[2]};
-
-    if (const YAML::Node negate = root["negate"]) {
-      // map_server writes 0/1; YAML booleans are accepted too.
-      const std::optional<double> n = asNumber(negate);
-      if (n && (*n == 0.0 || *n == 1.0)) {
-        info.negate = *n == 1.0;
-      } else {
-        try {
-          info.negate = negate.as<bool>();
-        } catch (const YAML::Exception&) {
-          keyError(source, "negate", "must be 0 or 1", negate);
-        }
-      }
-    }
-    if (root["occupied_thresh"]) info.occupied_thresh = requireNumber(root, "occupied_thresh", source);
-    if (root["free_thresh"]) info.free_thresh = requireNumber(root, "free_thresh", source);
-    if (info.occupied_thresh < 0.0 || info.occupied_thresh > 1.0) {
-      keyError(source, "occupied_thresh", "must lie in [0, 1]", root["occupied_thresh"]);
-    }
-    if (info.free_thresh < 0.0 || info.free_thresh > 1.0) {
-      keyError(source, "free_thresh", "must lie in [0, 1]", root["free_thresh"]);
-    }
-    if (info.free_thresh >= info.occupied_thresh) {
-      throw MapError(source + ": key 'free_thresh' (" + std::to_string(info.free_thresh) +
-                     ") must be below 'occupied_thresh' (" + std::to_string(info.occupied_thresh) + ")");
-    }
-
-    if (const YAML::Node mode = root["mode"]) {
-      const std::string m = mode.IsScalar() ? mode.Scalar() : std::string();
-      if (m == "trinary") {
-        info.mode = RosMapInfo::Mode::kTrinary;
-      } else if (m == "scale") {
-        info.mode = RosMapInfo::Mode::kScale;
-      } else if (m == "raw") {
-        info.mode = RosMapInfo::Mode::kRaw;
-      } else {
-        keyError(source, "mode", "must be trinary, scale or raw", mode);
-      }
-    }
-  } catch (const YAML::Exception& e) {
-    throw MapError(source + ": " + e.what());
-  }
-  return info;
+  return io::readAs<MapError>(source, [&] { return readRosMapInfo(io::ConfigDocument::parse(yaml_text, source, base_dir).root(), false); });
 }
 
 RosMapInfo loadRosMapInfo(const std::filesystem::path& yaml_path) {
   const std::string source = yaml_path.string();
-  RosMapInfo info = parseRosMapInfo(readFile(yaml_path, "map YAML"), source, yaml_path.parent_path());
-  if (!std::filesystem::is_regular_file(info.image)) {
-    throw MapError(source + ": key 'image': file " + info.image.string() + " not found");
-  }
-  return info;
+  return io::readAs<MapError>(source, [&] {
+    const std::string text = io::ConfigDocument::readFile(yaml_path, "map YAML");
+    return readRosMapInfo(io::ConfigDocument::parse(text, source, yaml_path.parent_path()).root(), true);
+  });
 }
 
 OccupancyGrid classifyImage(const PgmImage& image, const RosMapInfo& info) {

@@ -1,6 +1,7 @@
 #include "perception/depth_obstacles.hpp"
 
 #include "geometry/convex.hpp"
+#include "io/config_rules.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,12 +16,19 @@ namespace {
 constexpr int kMaxGridSide = 2000;
 constexpr std::int32_t kNoRow = std::numeric_limits<std::int32_t>::max();
 
-[[noreturn]] void bad(const char* field, double value, const char* rule) {
-  throw std::invalid_argument(std::string("depth obstacles: config.") + field + " must be " + rule + ", got " +
-                              std::to_string(value));
+// The grid reaches max_range_m from the camera: at most this many cells of it, so that the
+// grid (2 * (cells + 1) a side) stays within kMaxGridSide.
+constexpr double kMaxRangeCells = kMaxGridSide / 2 - 2;
+
+constexpr const char* kOwner = "depth obstacles";
+
+void require(const char* field, double value, const io::Range& range) { io::requireField(kOwner, field, value, range); }
+
+void requireCount(const char* field, long long value, long long lo, long long hi, const char* note = "") {
+  if (value < lo || value > hi) throw io::FieldError(kOwner, field, io::integerRange(lo, hi) + note, static_cast<double>(value));
 }
 
-bool finitePositive(double v) { return v > 0.0 && std::isfinite(v); }
+std::string number(double v) { return io::numberText(v); }
 
 }  // namespace
 
@@ -58,54 +66,53 @@ void DepthObstacleDetector::filterTurnRate(Track& tr, const Vec2& before, double
   tr.turn_rate = std::clamp(tr.turn_rate, -config_.max_turn_rate_rps, config_.max_turn_rate_rps);
 }
 
-void validateDepthObstaclesConfig(const DepthObstaclesConfig& c) {
-  if (c.pixel_stride < 1 || c.pixel_stride > 16) bad("pixel_stride", c.pixel_stride, "in 1..16");
-  if (!(c.min_depth_m >= 0.0) || !std::isfinite(c.min_depth_m)) bad("min_depth_m", c.min_depth_m, "finite and >= 0 (m)");
-  if (!finitePositive(c.max_range_m)) bad("max_range_m", c.max_range_m, "finite and > 0 (m)");
-  if (!std::isfinite(c.min_height_m)) bad("min_height_m", c.min_height_m, "finite (m)");
-  if (!(c.max_height_m > c.min_height_m) || !std::isfinite(c.max_height_m)) {
-    bad("max_height_m", c.max_height_m, "finite and > min_height_m (m)");
+void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_offset_m) {
+  using io::Range;
+  requireCount("pixel_stride", c.pixel_stride, 1, 16, " (every n-th pixel of every n-th row)");
+  require("min_depth_m", c.min_depth_m, Range::atLeast(0.0, "m"));
+  require("max_range_m", c.max_range_m, Range::above(0.0, "m"));
+  require("min_height_m", c.min_height_m, Range{});
+  if (!std::isfinite(c.max_height_m) || !(c.max_height_m > c.min_height_m)) {
+    throw io::FieldError(kOwner, "max_height_m", "> min_height_m (" + number(c.min_height_m) + " m)", c.max_height_m);
   }
-  if (!finitePositive(c.cell_m)) bad("cell_m", c.cell_m, "finite and > 0 (m)");
-  if (c.max_range_m / c.cell_m > kMaxGridSide / 2 - 2) {
-    bad("cell_m", c.cell_m, "large enough for max_range_m (at most 1000 cells of range)");
+  require("cell_m", c.cell_m, Range::above(0.0, "m"));
+  const double reach = c.max_range_m + camera_offset_m;
+  if (reach / c.cell_m > kMaxRangeCells) {
+    throw io::FieldError(kOwner, "cell_m",
+                         "large enough for max_range_m " + number(c.max_range_m) + " m (+ the camera's " + number(camera_offset_m) +
+                             " m offset): at most 998 cells of range",
+                         c.cell_m);
   }
-  if (c.min_points_per_cell < 1) bad("min_points_per_cell", c.min_points_per_cell, ">= 1");
-  if (c.min_cluster_points < 1) bad("min_cluster_points", c.min_cluster_points, ">= 1");
+  requireCount("min_points_per_cell", c.min_points_per_cell, 1, 65535);  // a cell counts in 16 bits
+  requireCount("min_cluster_points", c.min_cluster_points, 1, 1'000'000);
   if (!(c.cluster_gap_m >= c.cell_m && c.cluster_gap_m <= 5.0 * c.cell_m)) {
-    bad("cluster_gap_m", c.cluster_gap_m, "in [cell_m, 5 * cell_m] (m)");
+    throw io::FieldError(kOwner, "cluster_gap_m",
+                         "in [cell_m, 5 * cell_m] = [" + number(c.cell_m) + ", " + number(5.0 * c.cell_m) + "] m", c.cluster_gap_m);
   }
-  if (!(c.static_margin_m >= 0.0) || !std::isfinite(c.static_margin_m)) {
-    bad("static_margin_m", c.static_margin_m, "finite and >= 0 (m)");
-  }
-  if (c.max_vertices < 4 || c.max_vertices > hal::ObstacleFrame::kMaxVertices) {
-    bad("max_vertices", static_cast<double>(c.max_vertices), "in 4..32 (ObstacleFrame::kMaxVertices)");
-  }
-  if (!finitePositive(c.gate_m)) bad("gate_m", c.gate_m, "finite and > 0 (m)");
-  if (!finitePositive(c.centroid_noise_m)) bad("centroid_noise_m", c.centroid_noise_m, "finite and > 0 (m)");
-  if (!finitePositive(c.acceleration_mps2)) bad("acceleration_mps2", c.acceleration_mps2, "finite and > 0 (m/s^2)");
-  if (!finitePositive(c.max_speed_mps)) bad("max_speed_mps", c.max_speed_mps, "finite and > 0 (m/s)");
-  if (!finitePositive(c.turn_rate_time_s)) bad("turn_rate_time_s", c.turn_rate_time_s, "finite and > 0 (s)");
-  if (!(c.turn_min_speed_mps >= 0.0) || !std::isfinite(c.turn_min_speed_mps)) {
-    bad("turn_min_speed_mps", c.turn_min_speed_mps, "finite and >= 0 (m/s)");
-  }
-  if (!(c.max_turn_rate_rps >= 0.0) || !std::isfinite(c.max_turn_rate_rps)) {
-    bad("max_turn_rate_rps", c.max_turn_rate_rps, "finite and >= 0 (rad/s)");
-  }
-  if (c.max_missed_frames < 0) bad("max_missed_frames", c.max_missed_frames, ">= 0");
-  if (!finitePositive(c.max_frame_gap_s)) bad("max_frame_gap_s", c.max_frame_gap_s, "finite and > 0 (s)");
+  require("static_margin_m", c.static_margin_m, Range::atLeast(0.0, "m"));
+  requireCount("max_vertices", static_cast<long long>(std::min<std::size_t>(c.max_vertices, 1u << 30)), 4,
+               static_cast<long long>(hal::ObstacleFrame::kMaxVertices), " (ObstacleFrame::kMaxVertices)");
+  require("gate_m", c.gate_m, Range::above(0.0, "m"));
+  require("centroid_noise_m", c.centroid_noise_m, Range::above(0.0, "m"));
+  require("acceleration_mps2", c.acceleration_mps2, Range::above(0.0, "m/s^2"));
+  require("max_speed_mps", c.max_speed_mps, Range::above(0.0, "m/s"));
+  require("turn_rate_time_s", c.turn_rate_time_s, Range::above(0.0, "s"));
+  require("turn_min_speed_mps", c.turn_min_speed_mps, Range::atLeast(0.0, "m/s"));
+  require("max_turn_rate_rps", c.max_turn_rate_rps, Range::atLeast(0.0, "rad/s"));
+  requireCount("max_missed_frames", c.max_missed_frames, 0, 1000);
+  require("max_frame_gap_s", c.max_frame_gap_s, Range::above(0.0, "s"));
 }
 
 namespace {
-const DepthObstaclesConfig& validated(const DepthObstaclesConfig& c) {
-  validateDepthObstaclesConfig(c);
+const DepthObstaclesConfig& validated(const DepthObstaclesConfig& c, const hal::CameraMount& mount) {
+  validateDepthObstaclesConfig(c, cameraOffset(mount));
   return c;
 }
 }  // namespace
 
 DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::CameraIntrinsics& intrinsics,
                                              const hal::CameraMount& mount, const DepthObstaclesConfig& config)
-    : config_(validated(config)),
+    : config_(validated(config, mount)),
       camera_(intrinsics, mount),
       mask_(map, config.cell_m, config.static_margin_m) {
   // The sampled rays and, per ray, the depths whose points are in the band and in range.
@@ -136,11 +143,11 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
                           static_cast<std::uint16_t>(hi_mm)});
     }
   }
-  // The grid reaches max_range_m from the camera wherever the camera sits on the robot.
-  const double reach = config_.max_range_m + std::hypot(mount.x, mount.y);
+  // The grid reaches max_range_m from the camera wherever the camera sits on the robot
+  // (within kMaxGridSide: validated above).
+  const double reach = config_.max_range_m + cameraOffset(mount);
   n_ = 2 * (static_cast<int>(std::ceil(reach / config_.cell_m)) + 1);
   link_ = static_cast<int>(std::floor(config_.cluster_gap_m / config_.cell_m + 1e-9));
-  if (n_ > kMaxGridSide) bad("max_range_m", config_.max_range_m, "small enough (with the mount's offset) for the grid");
   const auto cells = static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_);
   count_.assign(cells, 0);
   sum_x_.assign(cells, 0.0F);

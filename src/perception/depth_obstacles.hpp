@@ -32,6 +32,7 @@
 #include "perception/static_map_mask.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -96,8 +97,13 @@ struct DepthObstaclesConfig {
   double max_frame_gap_s = 0.5;
 };
 
-// Throws std::invalid_argument naming the field and its value.
-void validateDepthObstaclesConfig(const DepthObstaclesConfig& config);
+// Every rule of the config (the ranges above, max_height_m > min_height_m, cluster_gap_m in
+// [cell_m, 5 * cell_m], max_range_m at most 998 cells from the camera): the one check, used
+// by the detector and by staad's config reader. `camera_offset_m`: the camera's horizontal
+// distance from the base centre (cameraOffset). Throws io::FieldError (an
+// std::invalid_argument) naming the field, the rule and the value.
+void validateDepthObstaclesConfig(const DepthObstaclesConfig& config, double camera_offset_m = 0.0);
+inline double cameraOffset(const hal::CameraMount& mount) { return std::hypot(mount.x, mount.y); }
 
 // What one frame produced (for telemetry and tests).
 struct DepthObstaclesStats {

@@ -2,9 +2,9 @@
 // A robot profile (`staa-robot/1`, docs/ARCHITECTURE.md section 6): footprint and limits.
 
 #include "geometry/types.hpp"
+#include "io/config_rules.hpp"
 
 #include <filesystem>
-#include <stdexcept>
 #include <string>
 
 namespace staa {
@@ -27,12 +27,13 @@ struct RobotProfile {
   double circumradius() const;
 };
 
-class ProfileError : public std::runtime_error {
+class ProfileError : public io::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using io::ConfigError::ConfigError;
 };
 
-// Errors name the file, the key and the value (e.g. "hsr.yaml: limits.v_max: must be > 0, got -1").
+// Errors name the file, the line, the key and the value (e.g. "hsr.yaml:9: limits.v_max:
+// must be > 0, got -1"; io/config_reader.hpp).
 RobotProfile parseRobotProfile(const std::string& yaml_text, const std::string& source);
 RobotProfile loadRobotProfile(const std::filesystem::path& path);
 

@@ -5,10 +5,10 @@
 
 #include "robot/robot_profile.hpp"
 #include "geometry/types.hpp"
+#include "io/config_rules.hpp"
 #include "map/polygon_map.hpp"
 
 #include <filesystem>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -36,9 +36,9 @@ struct Scenario {
 // offending value; for a bad map or profile it carries the MapError/ProfileError message
 // (which names that file) after the scenario's own "file: map:" prefix. Tools map it to
 // exit code 2.
-class ScenarioError : public std::runtime_error {
+class ScenarioError : public io::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using io::ConfigError::ConfigError;
 };
 
 // Parses YAML text; `source` is the scenario's path: relative `map` and `robot.profile` paths

@@ -43,19 +43,38 @@
 #include "map/polygon_map.hpp"
 #include "perception/depth_obstacles.hpp"
 #include "rt/realtime.hpp"
+#include "io/config_rules.hpp"
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace staa::staad {
 
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// A bad config (or environment): staad exits 2. The config reader's own error type.
+using ConfigError = io::ConfigError;
+
+// The selectors, parsed at the edge (the file, --hal) and compared as enums from then on.
+// hal: the base staad drives.
+enum class HalBackend { kSim, kSocketCan };
+inline constexpr io::Choice<HalBackend> kHalBackends[] = {{"sim", HalBackend::kSim}, {"socketcan", HalBackend::kSocketCan}};
+// obstacles: where the moving obstacles come from.
+enum class ObstacleSource { kSim, kDepth, kNone };
+inline constexpr io::Choice<ObstacleSource> kObstacleSources[] = {
+    {"sim", ObstacleSource::kSim, "the simulator's movers"},
+    {"depth", ObstacleSource::kDepth, "a depth camera: the camera section"},
+    {"none", ObstacleSource::kNone, "no obstacle sensor: empty frames"}};
+// camera.backend: where the depth frames come from.
+enum class CameraBackend { kSim, kOpenNI2 };
+inline constexpr io::Choice<CameraBackend> kCameraBackends[] = {
+    {"sim", CameraBackend::kSim, "frames rendered from the simulated world"},
+    {"openni2", CameraBackend::kOpenNI2, "the Xtion"}};
+
+std::string_view toString(HalBackend hal);          // "sim", "socketcan"
+std::string_view toString(ObstacleSource obstacles);  // "sim", "depth", "none"
+std::string_view toString(CameraBackend backend);   // "sim", "openni2"
 
 // hal: socketcan: the base over SocketCAN (hal/socketcan).
 struct SocketCanConfig {
@@ -70,7 +89,7 @@ struct SocketCanConfig {
 // obstacles: depth: the depth camera and the perception that turns its frames into the
 // obstacle frames (src/app/staad/depth_sensor.hpp).
 struct CameraConfig {
-  std::string backend = "sim";  // sim (frames rendered from the sim world) | openni2 (the Xtion)
+  CameraBackend backend = CameraBackend::kSim;  // frames rendered from the sim world | the Xtion
   std::string uri;              // openni2: the device's URI; empty: any device
   hal::CameraIntrinsics intrinsics;
   hal::CameraMount mount{0.0, 0.0, 1.0, 0.0, 0.3, 0.0};  // the HSR's head, looking down ahead
@@ -84,10 +103,10 @@ struct DaemonConfig {
   RobotProfile robot;
   std::filesystem::path map_file;
   PolygonMap map;
-  std::string hal = "sim";           // sim | socketcan
+  HalBackend hal = HalBackend::kSim;
   hal::SimHalConfig sim;              // hal: sim, obstacles: sim, or obstacles: depth with camera.backend: sim
   SocketCanConfig socketcan;          // hal: socketcan
-  std::string obstacles = "sim";      // sim (the sim world's movers) | depth (camera) | none (empty frames)
+  ObstacleSource obstacles = ObstacleSource::kSim;  // the sim world's movers | camera | empty frames
   CameraConfig camera;                // obstacles: depth
   double control_hz = 30.0;
   double base_hz = 100.0;
@@ -112,7 +131,7 @@ struct DaemonConfig {
 // Parses the YAML text; `source` names it in errors and anchors relative paths. `hal`, when
 // given (staad --hal), replaces the file's hal before the sections that depend on it are read.
 DaemonConfig parseDaemonConfig(const std::string& yaml_text, const std::filesystem::path& source,
-                               const std::optional<std::string>& hal = std::nullopt);
-DaemonConfig loadDaemonConfig(const std::filesystem::path& file, const std::optional<std::string>& hal = std::nullopt);
+                               std::optional<HalBackend> hal = std::nullopt);
+DaemonConfig loadDaemonConfig(const std::filesystem::path& file, std::optional<HalBackend> hal = std::nullopt);
 
 }  // namespace staa::staad

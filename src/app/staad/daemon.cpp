@@ -93,7 +93,8 @@ void Daemon::createWorkspaces() {
   // The simulated world: the base with hal: sim; the movers (the simulated camera) with
   // obstacles: sim, or rendered with camera.backend: sim (config.sim.movers_only with a real
   // base).
-  if (config_.hal == "sim" || config_.obstacles == "sim" || (config_.obstacles == "depth" && config_.camera.backend == "sim")) {
+  if (config_.hal == HalBackend::kSim || config_.obstacles == ObstacleSource::kSim ||
+      (config_.obstacles == ObstacleSource::kDepth && config_.camera.backend == CameraBackend::kSim)) {
     try {
       sim_ = std::make_unique<hal::SimHal>(config_.map, config_.robot, config_.sim, now);
     } catch (const std::invalid_argument& e) {
@@ -103,7 +104,7 @@ void Daemon::createWorkspaces() {
     }
   }
   hal::Base* base = nullptr;
-  if (config_.hal == "socketcan") {
+  if (config_.hal == HalBackend::kSocketCan) {
     // The bus is opened before anything else runs: a missing interface or socket is named
     // at once (exit 3), not discovered as a stale robot later.
     try {
@@ -120,9 +121,9 @@ void Daemon::createWorkspaces() {
     base = &sim_->base();
   }
   hal::ObstacleSensor* obstacles = nullptr;
-  if (config_.obstacles == "sim") {
+  if (config_.obstacles == ObstacleSource::kSim) {
     obstacles = &sim_->obstacles();
-  } else if (config_.obstacles == "depth") {
+  } else if (config_.obstacles == ObstacleSource::kDepth) {
     // The camera is opened here, like the bus: no device is exit 3 at once. The base is
     // wrapped so that the perception thread gets the robot's pose (depth_sensor.hpp).
     odometry_slot_ = std::make_unique<OdometrySlot>();
@@ -266,9 +267,9 @@ int Daemon::run() {
                         base_->started() ? base_task_.get() : nullptr);
   service_->ready(clock_.now());
   {
-    std::string hal = config_.hal;
-    if (config_.hal == "socketcan") hal.append(" on ").append(config_.socketcan.interface);
-    hal.append(", obstacles ").append(config_.obstacles);
+    std::string hal(toString(config_.hal));
+    if (config_.hal == HalBackend::kSocketCan) hal.append(" on ").append(config_.socketcan.interface);
+    hal.append(", obstacles ").append(toString(config_.obstacles));
     char line[512];
     std::snprintf(line, sizeof line, "ready: hal %s, control %.0f Hz (%s), base %.0f Hz, perception %.0f Hz, socket %s",
                   hal.c_str(), config_.control_hz,

@@ -43,7 +43,7 @@ class DeviceError : public std::runtime_error {
 
 struct DaemonOptions {
   std::filesystem::path config_file;  // empty: defaultConfigPath()
-  std::optional<std::string> hal;     // overrides the config's hal
+  std::optional<HalBackend> hal;      // overrides the config's hal
   std::optional<std::string> socket_path;
   std::optional<std::filesystem::path> telemetry_path;
   std::optional<std::filesystem::path> svg_path;  // overrides telemetry.svg

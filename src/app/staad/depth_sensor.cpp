@@ -93,11 +93,11 @@ bool DepthSensor::read(rt::Nanos now, hal::ObstacleFrame& out) {
 
 std::unique_ptr<DepthSensor> makeDepthSensor(const DaemonConfig& config, hal::SimHal* sim, OdometrySlot& pose) {
   const CameraConfig& camera = config.camera;
-  if (camera.backend == "sim") {
+  if (camera.backend == CameraBackend::kSim) {
     if (sim == nullptr) throw std::logic_error("makeDepthSensor: camera.backend sim needs the simulated world");
     return std::make_unique<DepthSensor>(config.map, camera, config.sim.seed, sim->obstacles(), pose);
   }
-  if (camera.backend == "openni2") {
+  if (camera.backend == CameraBackend::kOpenNI2) {
 #if defined(STAA_HAVE_OPENNI2)
     hal::OpenNI2Config oc;
     oc.uri = camera.uri;
@@ -116,7 +116,7 @@ std::unique_ptr<DepthSensor> makeDepthSensor(const DaemonConfig& config, hal::Si
         "built): rebuild with libopenni2-dev installed, or use camera.backend: sim");
 #endif
   }
-  throw std::invalid_argument("camera.backend: expected sim or openni2, got '" + camera.backend + "'");
+  throw std::logic_error("makeDepthSensor: camera.backend " + std::string(toString(camera.backend)) + " has no sensor");
 }
 
 }  // namespace staa::staad

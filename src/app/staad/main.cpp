@@ -12,6 +12,8 @@
 
 #include <exception>
 #include <iostream>
+#include <string>
+#include <vector>
 
 int main(int argc, char** argv) {
   using namespace staa::staad;
@@ -23,7 +25,9 @@ int main(int argc, char** argv) {
     std::string telemetry;
     std::string svg;
     app.add_option("--config", config, "daemon config (default: config/staad.yaml, then /etc/staad/staad.yaml)");
-    app.add_option("--hal", hal, "hardware: sim (the simulator) or socketcan")->check(CLI::IsMember({"sim", "socketcan"}));
+    std::vector<std::string> hal_names;  // the config's names, parsed into the enum below
+    for (const auto& choice : kHalBackends) hal_names.emplace_back(choice.name);
+    app.add_option("--hal", hal, "hardware: sim (the simulator) or socketcan")->check(CLI::IsMember(hal_names));
     app.add_option("--socket", socket, "control socket path (overrides socket.path)");
     app.add_option("--telemetry", telemetry, "telemetry CSV file (overrides telemetry.path)");
     app.add_option("--svg", svg, "a picture of the run written when staad stops (overrides telemetry.svg)");
@@ -36,7 +40,7 @@ int main(int argc, char** argv) {
 
     DaemonOptions options;
     options.config_file = config;
-    if (!hal.empty()) options.hal = hal;
+    if (!hal.empty()) options.hal = staa::io::valueOf<HalBackend>(kHalBackends, hal);
     if (!socket.empty()) options.socket_path = socket;
     if (!telemetry.empty()) options.telemetry_path = telemetry;
     if (!svg.empty()) options.svg_path = svg;

@@ -104,22 +104,22 @@ TEST(CanProfile, ErrorsNameFileLineKeyAndValue) {
       {"id: 0x110", "id: 2048", "id: 2048", "command.id: must be an 11-bit CAN ID (0..0x7FF), got 2048"},
       {"id: 0x220", "id: 0x210", "id: 0x210\n  rate_hz: 50", "status.id: 0x210 is already odometry.id, got 0x210"},
       {"base_id: 0x200", "base_id: 0x100", "base_id: 0x100", "heartbeat.base_id: 0x100 is already heartbeat.host_id"},
-      {"id: 0x110", "id: fast", "id: fast", "command.id: expected an 11-bit CAN ID (0..0x7FF), got fast"},
+      {"id: 0x110", "id: fast", "id: fast", "command.id: expected an 11-bit CAN ID (0..0x7FF), got 'fast'"},
       {"v_scale: 0.001", "v_scale: 0", "v_scale: 0", "command.v_scale: must be > 0, got 0"},
       {"recovery_interval_s: 1.0", "recovery_interval_s: soon", "recovery_interval_s: soon",
-       "bus.recovery_interval_s: expected a number, got soon"},
+       "bus.recovery_interval_s: expected a number, got 'soon'"},
       {"timeout_s: 0.3", "timeout_s: -0.3", "timeout_s: -0.3", "heartbeat.timeout_s: must be > 0, got -0.3"},
       {"timeout_s: 0.3", "timeout_s: 0.05", "timeout_s: 0.05",
        "heartbeat.timeout_s: must be longer than one frame period (1/rate_hz = 0.1 s), got 0.05"},
       {"  v_limit: 2.0                # |v| above this is out", "  v_limit: 40 # out", "v_limit: 40",
        "odometry.v_limit: does not fit the int16 field at scale 0.001 (at most 32.767), got 40"},
       {"format: staa-can-profile/1", "format: staa-can-profile/2", "format:",
-       "format: expected staa-can-profile/1, got staa-can-profile/2"},
-      {"byte_order: little", "byte_order: middle", "byte_order:", "byte_order: expected little or big, got middle"},
+       "format: unknown format, expected staa-can-profile/1, got 'staa-can-profile/2'"},
+      {"byte_order: little", "byte_order: middle", "byte_order:", "byte_order: expected little or big, got 'middle'"},
       {"  rate_hz: 30", "  rate_hzz: 30", "rate_hzz", "command.rate_hzz: unknown key (expected id, rate_hz, v_scale"},
       {"bus:", "buss:", "buss:", "buss: unknown key (expected format, name, byte_order"},
       {"  max_dt_s: 0.1", "  # max_dt_s: 0.1", "  id: 0x210", "odometry.max_dt_s: missing"},
-      {"  w_scale: 0.001\n", "  w_scale: 0.001\n  w_scale: 0.002\n", "  w_scale: 0.002", "command.w_scale: appears twice"},
+      {"  w_scale: 0.001\n", "  w_scale: 0.001\n  w_scale: 0.002\n", "  w_scale: 0.002", "command.w_scale: given twice (first on line 30)"},
   };
   for (const BadCase& c : cases) {
     const std::string text = edited(c.from, c.to);
@@ -141,12 +141,12 @@ TEST(CanProfile, InvalidYamlAndMissingFileNameThePlace) {
   ASSERT_NE(to, std::string::npos);
   text.replace(from, to - from, "status: 5");
   EXPECT_EQ(errorOf(text), "hsr_base.yaml:" + std::to_string(lineOf(text, "status: 5")) +
-                               ": status: expected a mapping, got '5'");
+                               ": status: expected a mapping {id, rate_hz, timeout_s}, got '5'");
   try {
     loadCanProfile("/nonexistent/base.yaml");
     FAIL() << "loaded a missing file";
   } catch (const CanProfileError& e) {
-    EXPECT_EQ(std::string(e.what()), "/nonexistent/base.yaml: cannot open CAN profile");
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/base.yaml: CAN profile not found");
   }
 }
 

@@ -86,30 +86,30 @@ TEST(RobotProfile, UnknownFormatNamesFileKeyAndValue) {
 
 TEST(RobotProfile, FootprintWithTwoVerticesIsRejected) {
   const std::string e = errorOf(withLine("[[0.3, 0.3], [-0.3, -0.3]]", kLimits));
-  EXPECT_THAT(e, HasSubstr("robot.yaml: footprint"));
+  EXPECT_THAT(e, HasSubstr("robot.yaml:3: footprint"));
   EXPECT_THAT(e, HasSubstr("has 2 vertices"));
 }
 
 TEST(RobotProfile, NonFiniteVertexIsRejected) {
   const std::string e = errorOf(withLine("[[0.3, 0.3], [-0.3, .nan], [-0.3, -0.3], [0.3, -0.3]]", kLimits));
   EXPECT_THAT(e, HasSubstr("footprint[1]"));
-  EXPECT_THAT(e, HasSubstr("not finite"));
+  EXPECT_THAT(e, HasSubstr("robot.yaml:3: footprint[1][1]: must be finite"));
   EXPECT_THAT(e, HasSubstr("nan"));
   const std::string e2 = errorOf(withLine("[[0.3, 0.3], [-0.3, abc], [-0.3, -0.3], [0.3, -0.3]]", kLimits));
   EXPECT_THAT(e2, HasSubstr("footprint[1]"));
-  EXPECT_THAT(e2, HasSubstr("a list of 2 items"));
+  EXPECT_THAT(e2, HasSubstr("footprint[1][1]: expected a number, got 'abc'"));
 }
 
 TEST(RobotProfile, SelfIntersectingFootprintIsRejected) {
   // A bow tie through the origin.
   const std::string e = errorOf(withLine("[[0.3, 0.3], [-0.3, -0.3], [-0.3, 0.3], [0.3, -0.3]]", kLimits));
-  EXPECT_THAT(e, HasSubstr("robot.yaml: footprint"));
+  EXPECT_THAT(e, HasSubstr("robot.yaml:3: footprint"));
   EXPECT_THAT(e, HasSubstr("self-intersecting"));
 }
 
 TEST(RobotProfile, FootprintNotContainingTheOriginIsRejected) {
   const std::string e = errorOf(withLine("[[1, 1], [2, 1], [2, 2], [1, 2]]", kLimits));
-  EXPECT_THAT(e, HasSubstr("robot.yaml: footprint"));
+  EXPECT_THAT(e, HasSubstr("robot.yaml:3: footprint"));
   EXPECT_THAT(e, HasSubstr("origin"));
   // On the boundary is not inside either.
   EXPECT_THAT(errorOf(withLine("[[0, 0], [1, 0], [1, 1], [0, 1]]", kLimits)), HasSubstr("origin"));
@@ -123,7 +123,7 @@ TEST(RobotProfile, MissingLimitsAreRejected) {
 
 TEST(RobotProfile, EachBadLimitNamesKeyAndValue) {
   EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: -1, v_min: -0.5, w_max: 2.0, a_max: 1.0, b_max: 3.0}")),
-              HasSubstr("robot.yaml: limits.v_max: must be > 0, got -1"));
+              HasSubstr("robot.yaml:4: limits.v_max: must be > 0, got -1"));
   EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 0, v_min: -0.5, w_max: 2.0, a_max: 1.0, b_max: 3.0}")),
               HasSubstr("limits.v_max: must be > 0, got 0"));
   EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 1, v_min: 0.25, w_max: 2.0, a_max: 1.0, b_max: 3.0}")),
@@ -143,9 +143,9 @@ TEST(RobotProfile, EachBadLimitNamesKeyAndValue) {
 }
 
 TEST(RobotProfile, UnknownKeysAreRejected) {
-  EXPECT_THAT(errorOf(withLine(kSquare, kLimits) + "wheelbase: 0.3\n"), HasSubstr("robot.yaml: wheelbase: unknown key"));
+  EXPECT_THAT(errorOf(withLine(kSquare, kLimits) + "wheelbase: 0.3\n"), HasSubstr("robot.yaml:5: wheelbase: unknown key"));
   EXPECT_THAT(errorOf(withLine(kSquare, "{v_max: 1, v_min: -0.5, w_max: 2, a_max: 1, b_max: 3, j_max: 9}")),
-              HasSubstr("robot.yaml: limits.j_max: unknown key"));
+              HasSubstr("robot.yaml:4: limits.j_max: unknown key"));
 }
 
 TEST(RobotProfile, LoadNamesAMissingFile) {

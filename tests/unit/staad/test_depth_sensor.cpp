@@ -167,9 +167,9 @@ TEST_F(CameraConfigFiles, ReadsEveryCameraKey) {
     text = edited(from, to, text);
   }
   const DaemonConfig c = load(text);
-  EXPECT_EQ(c.obstacles, "depth");
+  EXPECT_EQ(c.obstacles, ObstacleSource::kDepth);
   const CameraConfig& k = c.camera;
-  EXPECT_EQ(k.backend, "sim");
+  EXPECT_EQ(k.backend, CameraBackend::kSim);
   EXPECT_EQ(k.uri, "1d27/0601@3/7");
   EXPECT_DOUBLE_EQ(k.intrinsics.fx, 525.0);
   EXPECT_DOUBLE_EQ(k.intrinsics.fy, 526.5);
@@ -214,7 +214,7 @@ obstacles: depth
 camera: {backend: sim}
 )");
   const CameraConfig& k = c.camera;
-  EXPECT_EQ(k.backend, "sim");
+  EXPECT_EQ(k.backend, CameraBackend::kSim);
   EXPECT_EQ(k.uri, "");
   EXPECT_DOUBLE_EQ(k.intrinsics.fx, 570.3);
   EXPECT_DOUBLE_EQ(k.intrinsics.fy, 570.3);
@@ -264,8 +264,8 @@ TEST_F(CameraConfigFiles, ShippedConfigsCommentedCameraBlockLoadsWithItsValues) 
     fs::copy_file(test::sourceDir() / "config" / f, dir_ / "shipped" / f);
   }
   const DaemonConfig c = load(text, "shipped/staad.yaml");
-  EXPECT_EQ(c.obstacles, "depth");
-  EXPECT_EQ(c.camera.backend, "sim");
+  EXPECT_EQ(c.obstacles, ObstacleSource::kDepth);
+  EXPECT_EQ(c.camera.backend, CameraBackend::kSim);
   EXPECT_EQ(c.camera.uri, "");
   EXPECT_DOUBLE_EQ(c.camera.intrinsics.fx, 570.3);
   EXPECT_DOUBLE_EQ(c.camera.mount.pitch, 0.3);
@@ -346,8 +346,8 @@ TEST_F(CameraConfigFiles, TheSimSectionIsNeededOnlyForTheRenderedCamera) {
   const std::string no_sim = edited("sim:\n  start: [1.5, 4.5, 0.0]\n", "", edited("hal: sim", can));
   // openni2 with a real base: no simulated world at all.
   const DaemonConfig ni = load(edited("backend: sim", "backend: openni2", no_sim));
-  EXPECT_EQ(ni.camera.backend, "openni2");
-  EXPECT_EQ(ni.hal, "socketcan");
+  EXPECT_EQ(ni.camera.backend, CameraBackend::kOpenNI2);
+  EXPECT_EQ(ni.hal, HalBackend::kSocketCan);
   // The rendered camera with a real base: the world is anchored at sim.start, its movers walk.
   const std::string error = loadError(no_sim);
   EXPECT_THAT(error, HasSubstr("sim: missing (camera.backend: sim renders the simulated world"));
@@ -358,7 +358,7 @@ TEST_F(CameraConfigFiles, TheSimSectionIsNeededOnlyForTheRenderedCamera) {
 
 TEST_F(CameraConfigFiles, WithOtherObstaclesTheCameraSectionIsOnlyCheckedForTypos) {
   const DaemonConfig c = load(edited("obstacles: depth", "obstacles: sim", edited("backend: sim", "backend: kinect")));
-  EXPECT_EQ(c.obstacles, "sim");
+  EXPECT_EQ(c.obstacles, ObstacleSource::kSim);
   EXPECT_FALSE(std::isinf(c.sim.sensor_range_m));
   const std::string error = loadError(edited("obstacles: depth", "obstacles: none", edited("uri: \"\"", "ur: \"\"")));
   EXPECT_THAT(error, HasSubstr("camera.ur: unknown key"));

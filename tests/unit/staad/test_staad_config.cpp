@@ -131,8 +131,8 @@ TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
   EXPECT_EQ(c.map_file, (test::sourceDir() / "config/maps/office.yaml").lexically_normal());
   EXPECT_EQ(c.map.name, "office");
   EXPECT_FALSE(c.map.obstacles.empty());
-  EXPECT_EQ(c.hal, "sim");
-  EXPECT_EQ(c.obstacles, "sim");
+  EXPECT_EQ(c.hal, HalBackend::kSim);
+  EXPECT_EQ(c.obstacles, ObstacleSource::kSim);
   EXPECT_FALSE(c.debug_faults);
   EXPECT_FALSE(c.sim.movers_only);
   EXPECT_DOUBLE_EQ(c.sim.start.x, 1.5);
@@ -254,7 +254,7 @@ TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
       {"path: /run/staad/staad.sock", "path: /run/" + std::string(120, 's') + ".sock", {"socket.path", "107 bytes"}},
       // Typos are errors, not silently ignored keys.
       {"control_hz: 30", "control_hzz: 30", {"rates.control_hzz", "unknown key", "control_hz, base_hz, perception_hz"}},
-      {"hal: sim", "hal: sim\ncolour: blue", {"colour", "unknown key 'colour'"}},
+      {"hal: sim", "hal: sim\ncolour: blue", {"colour: unknown key (expected format, robot, map"}},
       {"  movers: 2", "  movers: 2\n  mover: 3", {"sim.mover", "unknown key"}},
       {"control: {priority: 80, cpu: -1}", "control: {priority: 80, cpus: -1}", {"threads.control.cpus", "unknown key"}},
       {"rates:\n  control_hz: 30", "rates:\n  control_hz: 30\n  control_hz: 20", {"rates.control_hz", "given twice", "line 13"}},
@@ -316,7 +316,7 @@ map: maps/office.yaml
 sim: {start: [1.5, 4.5, 0.0]}
 )"));
   const DaemonConfig defaults;
-  EXPECT_EQ(c.hal, "sim");
+  EXPECT_EQ(c.hal, HalBackend::kSim);
   EXPECT_DOUBLE_EQ(c.control_hz, defaults.control_hz);
   EXPECT_DOUBLE_EQ(c.budget.ms, defaults.budget.ms);
   EXPECT_EQ(c.socket_path, defaults.socket_path);
@@ -394,12 +394,12 @@ class SocketCanConfig : public ConfigFiles {
 
 TEST_F(SocketCanConfig, ReadsTheInterfaceAndParsesTheProfile) {
   const DaemonConfig c = loadDaemonConfig(write("staad.yaml", socketcan("{interface: can0, profile: can/hsr_base.yaml}")));
-  EXPECT_EQ(c.hal, "socketcan");
+  EXPECT_EQ(c.hal, HalBackend::kSocketCan);
   EXPECT_EQ(c.socketcan.interface, "can0");
   EXPECT_EQ(c.socketcan.profile_file, dir_ / "can/hsr_base.yaml");
   EXPECT_EQ(c.socketcan.profile.name, "hsr-base-bridge");
   EXPECT_DOUBLE_EQ(c.socketcan.profile.odometry.rate_hz, 100.0);
-  EXPECT_EQ(c.obstacles, "sim");
+  EXPECT_EQ(c.obstacles, ObstacleSource::kSim);
   EXPECT_TRUE(c.sim.movers_only) << "the simulated camera: nobody drives the sim world's robot";
   EXPECT_EQ(c.sim.movers, 2);
   EXPECT_FALSE(c.debug_faults);
@@ -415,7 +415,7 @@ TEST_F(SocketCanConfig, ObstaclesNoneNeedsNoSimulatedWorld) {
   std::string text = socketcan("{interface: vcan0, profile: can/hsr_base.yaml}", "none");
   text.replace(text.find("  start: [1.5, 4.5, 0.0]\n"), 25, "");
   const DaemonConfig c = loadDaemonConfig(write("staad.yaml", text));
-  EXPECT_EQ(c.obstacles, "none");
+  EXPECT_EQ(c.obstacles, ObstacleSource::kNone);
   // With obstacles: sim the start anchors the simulated world: required.
   EXPECT_THAT(loadError(edited("obstacles: none", "obstacles: sim", text)), HasSubstr("sim.start: missing"));
   const std::string no_sim = R"(format: staad-config/1
@@ -425,7 +425,7 @@ hal: socketcan
 socketcan: {interface: can0, profile: can/hsr_base.yaml}
 )";
   EXPECT_THAT(loadError(no_sim), HasSubstr("sim: missing (obstacles: sim needs at least sim.start"));
-  EXPECT_EQ(loadDaemonConfig(write("none.yaml", no_sim + "obstacles: none\n")).obstacles, "none");
+  EXPECT_EQ(loadDaemonConfig(write("none.yaml", no_sim + "obstacles: none\n")).obstacles, ObstacleSource::kNone);
 }
 
 TEST_F(SocketCanConfig, BadValuesAreNamedWithTheirKeyAndLine) {
@@ -460,18 +460,21 @@ TEST_F(SocketCanConfig, HalFromTheCommandLineIsAppliedBeforeItsSectionIsRead) {
   // --hal socketcan on a sim config without a socketcan section: named as missing.
   const fs::path sim = write("staad.yaml", kValid);
   try {
-    loadDaemonConfig(sim, "socketcan");
+    loadDaemonConfig(sim, HalBackend::kSocketCan);
     FAIL() << "no error";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), HasSubstr("socketcan: missing"));
   }
   // --hal sim on a socketcan config: the sim section is read (and the socketcan one only
   // checked for typos).
-  const DaemonConfig c = loadDaemonConfig(write("can.yaml", socketcan("{interface: can0, profile: can/hsr_base.yaml}")), "sim");
-  EXPECT_EQ(c.hal, "sim");
+  const DaemonConfig c = loadDaemonConfig(write("can.yaml", socketcan("{interface: can0, profile: can/hsr_base.yaml}")), HalBackend::kSim);
+  EXPECT_EQ(c.hal, HalBackend::kSim);
   EXPECT_FALSE(c.sim.movers_only);
   EXPECT_DOUBLE_EQ(c.sim.start.x, 1.5);
-  EXPECT_THROW(loadDaemonConfig(sim, "warp"), ConfigError);
+  // --hal takes the config's names, parsed into the enum on the command line: not "warp".
+  EXPECT_EQ(io::valueOf<HalBackend>(kHalBackends, "warp"), std::nullopt);
+  EXPECT_EQ(io::valueOf<HalBackend>(kHalBackends, "socketcan"), HalBackend::kSocketCan);
+  EXPECT_EQ(toString(HalBackend::kSocketCan), "socketcan");
 }
 
 TEST_F(ConfigFiles, DebugFaultsAreOffUnlessAsked) {

@@ -108,26 +108,26 @@ TEST_F(ScenarioFiles, MoversAreOptional) {
 }
 
 TEST_F(ScenarioFiles, UnknownFormatAndKeysAreRejected) {
-  EXPECT_THAT(loadError(edited("staa-scenario/1", "staa-scenario/9")), HasSubstr("s.yaml: format: unknown format 'staa-scenario/9'"));
-  EXPECT_THAT(loadError(kValid + "agents: 3\n"), HasSubstr("s.yaml: agents: unknown key"));
+  EXPECT_THAT(loadError(edited("staa-scenario/1", "staa-scenario/9")), HasSubstr("s.yaml:1: format: unknown format, expected staa-scenario/1, got 'staa-scenario/9'"));
+  EXPECT_THAT(loadError(kValid + "agents: 3\n"), HasSubstr("s.yaml:11: agents: unknown key"));
   EXPECT_THAT(loadError(edited("speed: 1.2", "speed: 1.2\n    rotation: 1")), HasSubstr("movers[0].rotation: unknown key"));
   EXPECT_THAT(loadError(edited("goal:", "radius: 1, goal:")), HasSubstr("robot.radius: unknown key"));
 }
 
 TEST_F(ScenarioFiles, BadMapOrProfileNamesBothFiles) {
   const std::string e = loadError(edited("../maps/room.yaml", "../maps/nope.yaml"));
-  EXPECT_THAT(e, HasSubstr("s.yaml: map: "));
+  EXPECT_THAT(e, HasSubstr("s.yaml:2: map: "));
   EXPECT_THAT(e, HasSubstr("nope.yaml"));
   write("robots/bad.yaml", "format: staa-robot/1\nfootprint: [[1, 1], [2, 1], [2, 2]]\nlimits: {v_max: 1, v_min: 0, w_max: 1, a_max: 1, b_max: 1}\n");
   const std::string p = loadError(edited("../robots/agent.yaml", "../robots/bad.yaml"));
-  EXPECT_THAT(p, HasSubstr("s.yaml: robot.profile: "));
-  EXPECT_THAT(p, HasSubstr("bad.yaml: footprint"));
+  EXPECT_THAT(p, HasSubstr("s.yaml:3: robot.profile: "));
+  EXPECT_THAT(p, HasSubstr("bad.yaml:2: footprint"));
   EXPECT_THAT(p, HasSubstr("origin"));
 }
 
 TEST_F(ScenarioFiles, StartInsideOrTouchingAnObstacleIsRejected) {
   const std::string e = loadError(edited("start: [1.5, 1.5, 0.0]", "start: [5.0, 4.0, 0.0]"));
-  EXPECT_THAT(e, HasSubstr("s.yaml: robot.start:"));
+  EXPECT_THAT(e, HasSubstr("s.yaml:3: robot.start:"));
   EXPECT_THAT(e, HasSubstr("(5, 4)"));
   EXPECT_THAT(e, HasSubstr("overlaps obstacle 0"));
   // Origin free, but the 0.4 m nose reaches into the box at x = 4.
@@ -138,18 +138,18 @@ TEST_F(ScenarioFiles, StartInsideOrTouchingAnObstacleIsRejected) {
 
 TEST_F(ScenarioFiles, GoalInsideAnObstacleOrOutsideTheBoundsIsRejected) {
   const std::string e = loadError(edited("goal: [8.0, 6.5, 1.57]", "goal: [4.5, 3.5, 0]"));
-  EXPECT_THAT(e, HasSubstr("s.yaml: robot.goal: (4.5, 3.5) is inside obstacle 0"));
+  EXPECT_THAT(e, HasSubstr("s.yaml:3: robot.goal: (4.5, 3.5) is inside obstacle 0"));
   EXPECT_THAT(loadError(edited("goal: [8.0, 6.5, 1.57]", "goal: [12, 3.5, 0]")), HasSubstr("robot.goal: (12, 3.5) is outside the map bounds"));
 }
 
 TEST_F(ScenarioFiles, BadPosesAreRejected) {
   EXPECT_THAT(loadError(edited("start: [1.5, 1.5, 0.0]", "start: [1.5, 1.5]")), HasSubstr("robot.start: expected [x, y, theta], got a list of 2 items"));
   EXPECT_THAT(loadError(edited("start: [1.5, 1.5, 0.0]", "start: [1.5, .nan, 0]")), HasSubstr("robot.start[1]: must be finite, got .nan"));
-  EXPECT_THAT(loadError(edited(", goal: [8.0, 6.5, 1.57]", "")), HasSubstr("s.yaml: robot.goal: missing"));
+  EXPECT_THAT(loadError(edited(", goal: [8.0, 6.5, 1.57]", "")), HasSubstr("s.yaml:3: robot.goal: missing"));
 }
 
 TEST_F(ScenarioFiles, BadMoversAreRejected) {
-  EXPECT_THAT(loadError(edited("speed: 1.2", "speed: -1")), HasSubstr("s.yaml: movers[0].speed: must be >= 0, got -1"));
+  EXPECT_THAT(loadError(edited("speed: 1.2", "speed: -1")), HasSubstr("s.yaml:7: movers[0].speed: must be >= 0, got -1"));
   EXPECT_THAT(loadError(edited("speed: 1.2", "speed: quick")), HasSubstr("movers[0].speed: expected a number, got 'quick'"));
   EXPECT_THAT(loadError(edited("waypoints: [[2.0, 6.0]]", "waypoints: []")), HasSubstr("movers[1].waypoints: expected a list of at least one"));
   EXPECT_THAT(loadError(edited("waypoints: [[2.0, 6.0]]", "waypoints: [[2.0, .inf]]")), HasSubstr("movers[1].waypoints[0][1]: must be finite"));

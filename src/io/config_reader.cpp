@@ -1,0 +1,348 @@
+#include "io/config_reader.hpp"
+
+#include "io/yaml_support.hpp"
+
+#include "geometry/polygon.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <system_error>
+#include <utility>
+
+namespace staa::io {
+
+namespace fs = std::filesystem;
+
+struct Origin {
+  std::string source;
+  fs::path directory;
+};
+
+namespace {
+
+int lineOf(const YAML::Node& node) {
+  if (!node.IsDefined()) return 0;
+  const YAML::Mark mark = node.Mark();
+  return mark.line >= 0 ? mark.line + 1 : 0;
+}
+
+std::string joined(std::initializer_list<std::string_view> keys) {
+  std::string out;
+  for (std::string_view k : keys) {
+    if (!out.empty()) out += ", ";
+    out += k;
+  }
+  return out;
+}
+
+// A decimal integer, a leading + allowed.
+template <class T>
+std::optional<T> parseInteger(const YAML::Node& node) {
+  if (!node.IsScalar()) return std::nullopt;
+  std::string_view s = node.Scalar();
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  T v{};
+  const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || res.ec != std::errc{} || res.ptr != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+std::string pointText(const Vec2& p) { return yaml_support::formatPoint(p); }
+
+}  // namespace
+
+// ---- ConfigValue ----
+
+ConfigValue::ConfigValue(std::shared_ptr<const Origin> origin, bool given, YAML::Node node, std::string path, int line,
+                         int key_line)
+    : origin_(std::move(origin)), given_(given), node_(std::move(node)), path_(std::move(path)), line_(line), key_line_(key_line) {}
+
+ConfigValue ConfigValue::absent(std::string path) const { return ConfigValue(origin_, false, YAML::Node(), std::move(path), line_, line_); }
+
+std::string ConfigValue::childPath(std::string_view key) const {
+  std::string out = path_;
+  if (!out.empty()) out += '.';
+  out += key;
+  return out;
+}
+
+const std::string& ConfigValue::source() const { return origin_->source; }
+
+std::string ConfigValue::text() const {
+  if (given_ && node_.IsScalar()) return node_.Scalar();
+  return described();
+}
+
+std::string ConfigValue::described() const { return given_ ? yaml_support::describe(node_) : std::string("nothing"); }
+
+void ConfigValue::fail(const std::string& problem) const {
+  std::string msg = origin_->source;
+  if (line_ > 0) msg += ":" + std::to_string(line_);
+  msg += ": ";
+  if (!path_.empty()) msg += path_ + ": ";
+  msg += problem;
+  throw ConfigError(msg);
+}
+
+void ConfigValue::failAtKey(const std::string& problem) const {
+  ConfigValue at = *this;
+  at.line_ = key_line_;
+  at.fail(problem);
+}
+
+void ConfigValue::failAt(const ConfigValue& where, const std::string& problem) const {
+  ConfigValue at = *this;
+  at.line_ = where.key_line_;
+  at.fail(problem);
+}
+
+void ConfigValue::failRule(const std::string& rule) const { fail("must be " + rule + ", got " + text()); }
+
+const ConfigValue& ConfigValue::anyMapping() const {
+  if (!given_ || !node_.IsMap()) fail("expected a mapping, got " + described());
+  std::vector<std::pair<std::string, int>> seen;
+  for (const auto& kv : node_) {
+    if (!kv.first.IsScalar()) continue;
+    const std::string& key = kv.first.Scalar();
+    for (const auto& [k, first_line] : seen) {
+      if (k == key) {
+        ConfigValue at = child(kv.first, kv.second, key);
+        at.failAtKey("given twice (first on line " + std::to_string(first_line) + ")");
+      }
+    }
+    seen.emplace_back(key, lineOf(kv.first));
+  }
+  return *this;
+}
+
+const ConfigValue& ConfigValue::mapping(std::initializer_list<std::string_view> keys) const {
+  if (!given_ || !node_.IsMap()) fail("expected a mapping {" + joined(keys) + "}, got " + described());
+  for (const auto& kv : node_) {
+    if (!kv.first.IsScalar()) {
+      ConfigValue at = *this;
+      at.line_ = lineOf(kv.first);
+      at.fail("a key that is not a name, " + yaml_support::describe(kv.first) + " (expected " + joined(keys) + ")");
+    }
+    if (std::find(keys.begin(), keys.end(), kv.first.Scalar()) == keys.end()) {
+      child(kv.first, kv.second, kv.first.Scalar()).failAtKey("unknown key (expected " + joined(keys) + ")");
+    }
+  }
+  return anyMapping();
+}
+
+ConfigValue ConfigValue::child(const YAML::Node& key, const YAML::Node& value, std::string_view name) const {
+  const int key_line = lineOf(key);
+  // A null value (`key:` and nothing) has yaml-cpp's mark of whatever follows it.
+  const int line = value.IsNull() ? 0 : lineOf(value);
+  return ConfigValue(origin_, true, value, childPath(name), line > 0 ? line : key_line, key_line > 0 ? key_line : line);
+}
+
+ConfigValue ConfigValue::get(std::string_view key) const {
+  if (given_ && node_.IsMap()) {
+    for (const auto& kv : node_) {
+      if (kv.first.IsScalar() && kv.first.Scalar() == key) return child(kv.first, kv.second, key);
+    }
+  }
+  return absent(childPath(key));
+}
+
+ConfigValue ConfigValue::required(std::string_view key, std::string_view what) const {
+  ConfigValue v = get(key);
+  if (!v.present()) v.fail(what.empty() ? std::string("missing") : "missing (" + std::string(what) + ")");
+  return v;
+}
+
+ConfigValue ConfigValue::section(std::string_view key, std::initializer_list<std::string_view> keys) const {
+  ConfigValue v = get(key);
+  if (v.given()) v.mapping(keys);
+  return v;
+}
+
+const ConfigValue& ConfigValue::list(std::string_view what, std::size_t min_items) const {
+  if (!given_ || !node_.IsSequence() || node_.size() < min_items) fail("expected " + std::string(what) + ", got " + described());
+  return *this;
+}
+
+ConfigValue ConfigValue::operator[](std::size_t i) const {
+  std::string path = path_ + "[" + std::to_string(i) + "]";
+  if (!given_ || !node_.IsSequence() || i >= node_.size()) return absent(std::move(path));
+  const YAML::Node item = node_[i];
+  const int line = lineOf(item);
+  return ConfigValue(origin_, true, item, std::move(path), line > 0 ? line : line_, line > 0 ? line : line_);
+}
+
+double ConfigValue::number() const {
+  const std::optional<double> v = given_ ? yaml_support::readNumber(node_) : std::nullopt;
+  if (!v) fail("expected a number, got " + described());
+  if (!std::isfinite(*v)) fail("must be finite, got " + text());
+  return *v;
+}
+
+double ConfigValue::number(const Range& range) const {
+  const double v = number();
+  if (!range.contains(v)) failRule(range.text());
+  return v;
+}
+
+long long ConfigValue::integer() const {
+  const std::optional<long long> v = given_ ? parseInteger<long long>(node_) : std::nullopt;
+  if (!v) fail("expected an integer, got " + described());
+  return *v;
+}
+
+long long ConfigValue::integer(long long lo, long long hi, std::string_view note) const {
+  const std::optional<long long> v = given_ ? parseInteger<long long>(node_) : std::nullopt;
+  if (!v || *v < lo || *v > hi) {
+    fail("must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + std::string(note) + ", got " + text());
+  }
+  return *v;
+}
+
+std::uint64_t ConfigValue::unsignedInteger() const {
+  const std::optional<std::uint64_t> v = given_ ? parseInteger<std::uint64_t>(node_) : std::nullopt;
+  if (!v) fail("must be an integer >= 0, got " + text());
+  return *v;
+}
+
+bool ConfigValue::boolean() const {
+  bool on = false;
+  if (!given_ || !node_.IsScalar() || !YAML::convert<bool>::decode(node_, on)) fail("expected true or false, got " + described());
+  return on;
+}
+
+std::string ConfigValue::string(std::string_view what) const {
+  if (!given_ || !node_.IsScalar()) fail("expected " + std::string(what) + ", got " + described());
+  return node_.Scalar();
+}
+
+std::string ConfigValue::nonEmptyString(std::string_view what) const {
+  std::string s = string(what);
+  if (s.empty()) fail("expected " + std::string(what) + ", got ''");
+  return s;
+}
+
+fs::path ConfigValue::path(std::string_view what) const {
+  const fs::path p(nonEmptyString(what));
+  return p.is_absolute() ? p : origin_->directory / p;
+}
+
+std::string ConfigValue::joinedChoices(std::span<const std::string_view> names, std::span<const std::string_view> meanings) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) out += i + 1 == names.size() ? " or " : ", ";
+    out += names[i];
+    if (!meanings[i].empty()) {
+      out += " (";
+      out += meanings[i];
+      out += ')';
+    }
+  }
+  return out;
+}
+
+Vec2 ConfigValue::point() const {
+  const auto v = numbers<2>("[x, y]");
+  return {v[0], v[1]};
+}
+
+Pose2 ConfigValue::pose() const {
+  const auto v = numbers<3>("[x, y, theta]");
+  return {v[0], v[1], v[2]};
+}
+
+Polygon ConfigValue::polygon() const {
+  list("a list of [x, y] vertices");
+  Polygon poly;
+  poly.reserve(size());
+  for (std::size_t k = 0; k < size(); ++k) poly.push_back((*this)[k].point());
+  if (const std::string problem = polygonProblem(poly); !problem.empty()) fail(problem);
+  return poly;
+}
+
+// ---- ConfigDocument ----
+
+ConfigDocument ConfigDocument::parse(const std::string& text, const std::string& source) {
+  return parse(text, source, fs::path(source).parent_path());
+}
+
+ConfigDocument ConfigDocument::parse(const std::string& text, const std::string& source, const fs::path& directory) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    std::string msg = source;
+    if (e.mark.line >= 0) msg += ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1);
+    throw ConfigError(msg + ": not valid YAML: " + e.msg);
+  }
+  auto origin = std::make_shared<const Origin>(Origin{source, directory});
+  // The document as a whole has no line: a key missing from it is missing from the file.
+  return ConfigDocument(ConfigValue(std::move(origin), true, root, "", 0, 0));
+}
+
+const ConfigValue& ConfigDocument::root(std::string_view format, std::initializer_list<std::string_view> keys) const {
+  if (!root_.node().IsMap()) {
+    root_.fail("expected a mapping {" + joined(keys) + "} (a " + std::string(format) + " document), got " + root_.described());
+  }
+  const ConfigValue f = root_.get("format");
+  if (!f.present()) f.fail("missing (expected " + std::string(format) + ")");
+  if (!f.node().IsScalar() || f.node().Scalar() != format) {
+    f.fail("unknown format, expected " + std::string(format) + ", got " + f.described());
+  }
+  root_.mapping(keys);
+  return root_;
+}
+
+std::string ConfigDocument::readFile(const fs::path& file, std::string_view what) {
+  const std::string name = file.string();
+  std::error_code ec;
+  const auto status = fs::status(file, ec);
+  if (!fs::exists(status)) throw ConfigError(name + ": " + std::string(what) + " not found");
+  if (fs::is_directory(status)) throw ConfigError(name + ": is a directory, not a " + std::string(what));
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ConfigError(name + ": cannot open " + std::string(what) + ": " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError(name + ": read error");
+  return std::move(text).str();
+}
+
+// ---- polygons ----
+
+std::string polygonProblem(PolygonView poly) {
+  const std::size_t n = poly.size();
+  if (n < 3) return "has " + std::to_string(n) + " vertices, needs at least 3";
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(poly[k].x()) || !std::isfinite(poly[k].y())) return "vertex " + std::to_string(k) + " is not finite " + pointText(poly[k]);
+  }
+  // Edge k runs from vertex k to vertex k+1 (the last one back to vertex 0). A repeated
+  // vertex is checked first: findSelfIntersection would report it as touching edges.
+  for (std::size_t i = 0; i < n; ++i) {
+    if (poly[i] == poly[(i + 1) % n]) {
+      return "vertex " + std::to_string((i + 1) % n) + " repeats vertex " + std::to_string(i) + " " + pointText(poly[i]) +
+             " (zero-length edge " + std::to_string(i) + ")";
+    }
+  }
+  if (const auto e = findSelfIntersection(poly)) {
+    const std::size_t i = e->first, j = e->second;
+    const bool adjacent = (j == i + 1) || (i == 0 && j == n - 1);
+    const char* how = adjacent ? " fold back over each other)"
+                      : segmentsCrossProperly(poly[i], poly[(i + 1) % n], poly[j], poly[(j + 1) % n])
+                          ? " cross)"
+                          : " touch)";
+    return "self-intersecting (edges " + std::to_string(i) + " and " + std::to_string(j) + how;
+  }
+  // Collinear vertices pass the edge test when no two edges overlap (a triangle on a line);
+  // the area, relative to the polygon's size, catches them.
+  const Box box = boundingBox(poly);
+  const double size = std::max(box.width(), box.height());
+  if (std::abs(signedArea(poly)) <= 1e-12 * size * size) return "has zero area (all vertices on one line)";
+  return "";
+}
+
+}  // namespace staa::io
