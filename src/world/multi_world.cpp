@@ -2,6 +2,7 @@
 
 #include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
+#include "world/contact.hpp"
 #include "world/footprint.hpp"
 
 #include <algorithm>
@@ -9,18 +10,12 @@
 #include <stdexcept>
 
 namespace staa {
+using contact::kContactBisections;
+using contact::kSampleSpacing;
+using contact::kTouchMargin;
+using contact::strictlyInside;
+
 namespace {
-
-// As in World: the largest travel of any footprint point between two swept-motion samples,
-// the bisection steps for the contact point, and the box prefilter's widening beyond
-// polygonsOverlap's 1e-9 m touching tolerance.
-constexpr double kSampleSpacing = 0.01;  // m
-constexpr int kContactBisections = 40;
-constexpr double kTouchMargin = 1e-8;  // m
-
-bool strictlyInside(const Box& b, const Vec2& p) {
-  return p.x() > b.min.x() && p.x() < b.max.x() && p.y() > b.min.y() && p.y() < b.max.y();
-}
 
 Box grown(const Box& b, double r) { return Box{b.min - Vec2(r, r), b.max + Vec2(r, r)}; }
 

@@ -2,6 +2,7 @@
 
 #include "geometry/convex.hpp"
 #include "geometry/polygon.hpp"
+#include "world/contact.hpp"
 #include "world/footprint.hpp"
 
 #include <algorithm>
@@ -10,23 +11,11 @@
 #include <stdexcept>
 
 namespace staa {
-namespace {
 
-// Largest travel of any footprint point between two swept-motion samples.
-constexpr double kSampleSpacing = 0.01;  // m
-// Bisection steps for the contact point: the free fraction of the step to 2^-40.
-constexpr int kContactBisections = 40;
-// polygonsOverlap counts points within 1e-9 m of an edge as touching; the bounding-box
-// prefilter is widened by more than that so it never skips a pair the exact test would call
-// touching.
-constexpr double kTouchMargin = 1e-8;  // m
-
-
-bool strictlyInside(const Box& b, const Vec2& p) {
-  return p.x() > b.min.x() && p.x() < b.max.x() && p.y() > b.min.y() && p.y() < b.max.y();
-}
-
-}  // namespace
+using contact::kContactBisections;
+using contact::kSampleSpacing;
+using contact::kTouchMargin;
+using contact::strictlyInside;
 
 World::World(PolygonMap map, RobotProfile profile, const Pose2& start, std::vector<Mover> movers)
     : map_(std::move(map)), profile_(std::move(profile)) {

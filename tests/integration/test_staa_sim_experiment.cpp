@@ -4,6 +4,7 @@
 #include "planner/staa_star.hpp"
 
 #include "read_file.hpp"
+#include "temp_dir.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -27,12 +28,7 @@ using ::testing::HasSubstr;
 
 using staa::test::readFile;
 
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("staa-sim-experiment-test-" + std::to_string(::getpid()) + "-" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path freshDir(const std::string& name) { return staa::test::freshDir("staa-sim-experiment-test", name); }
 
 // ---- the binary ----
 

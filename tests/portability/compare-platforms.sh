@@ -91,10 +91,11 @@ for l in "${labels[@]}"; do
   # (1.5,1.5 lies in the office's blocked corner, which staa-sim refuses: 1.5,4.5 is free.)
   run "$l" sim-office-1-robot staa-sim --map "$office" --start 1.5,4.5,0 --goal 22.5,22.5,0 --duration 30 \
     --budget-expansions 1000 --quiet --json @OUT@/sim-office-1-robot.json &
-  # The baselines' arithmetic too (their scenario tests run on x86-64 only).
-  run "$l" sim-office-dwa-ghost staa-sim --map "$office" --agents 3 --mode ghost --controller dwa --duration 6 \
+  # The baselines' arithmetic too (their scenario tests run on x86-64 only); the expansion
+  # budget also bounds their path queries by work, not time.
+  run "$l" sim-office-dwa-ghost staa-sim --map "$office" --agents 3 --mode ghost --controller dwa --duration 6 --budget-expansions 1000 \
     --seed 4 --quiet --json @OUT@/sim-office-dwa-ghost.json &
-  run "$l" sim-office-pd staa-sim --map "$office" --agents 3 --controller pd --duration 6 \
+  run "$l" sim-office-pd staa-sim --map "$office" --agents 3 --controller pd --duration 6 --budget-expansions 1000 \
     --seed 5 --quiet --json @OUT@/sim-office-pd.json &
 done
 wait

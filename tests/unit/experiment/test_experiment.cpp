@@ -7,6 +7,7 @@
 #include "experiment/experiment_plots.hpp"
 
 #include "read_file.hpp"
+#include "temp_dir.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -33,12 +34,7 @@ using ::testing::HasSubstr;
 
 using staa::test::readFile;
 
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("staa-experiment-test-" + std::to_string(::getpid()) + "-" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path freshDir(const std::string& name) { return staa::test::freshDir("staa-experiment-test", name); }
 
 // One small generated map, PD and STAA*, one mode, one agent, two runs of 3 s with an
 // expansion budget (reproducible), two threads.
