@@ -10,6 +10,8 @@ const char* toString(BaseFault fault) {
     case BaseFault::kBusOff: return "bus off";
     case BaseFault::kWriteFailed: return "write failed";
     case BaseFault::kDriverFault: return "driver fault";
+    case BaseFault::kOdometryInvalid: return "odometry invalid";
+    case BaseFault::kOdometryStampBack: return "odometry stamp went back";
   }
   // A value cast in from a corrupted frame: say so instead of reading past a table.
   return "unknown";

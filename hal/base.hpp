@@ -6,7 +6,8 @@
 // passes odometry and commands to the other threads through triple buffers.
 //
 // Implementations: the simulated base (src/world/sim_hal.hpp), hal/mock (scripted, for
-// tests), hal/socketcan (a base driver over a CAN transport opened by file descriptor).
+// tests), hal/socketcan (a base driver over a CAN transport opened by file descriptor),
+// hal/ros (a base commanded over a ROS transport: the HSR-B).
 // read() and write() never allocate, lock or block beyond a non-blocking poll of their
 // transport.
 
@@ -24,6 +25,8 @@ enum class BaseFault : std::uint8_t {
   kBusOff,          // the bus is gone (CAN bus-off, transport closed)
   kWriteFailed,     // the command could not be sent
   kDriverFault,     // the base reports a drive fault (fault_code says which)
+  kOdometryInvalid,    // the newest odometry had a NaN or infinite value (hal/ros)
+  kOdometryStampBack,  // the newest odometry's stamp went back in time (hal/ros)
 };
 const char* toString(BaseFault fault);
 
@@ -45,6 +48,12 @@ struct BaseStatus {
   std::uint64_t bad_frames = 0;    // frames dropped as malformed (ID, DLC, checksum, range, ...)
   std::uint64_t rx_overflows = 0;  // frames the kernel dropped on a full receive queue
   std::uint64_t error_frames = 0;  // CAN error frames received
+  // Localization fixes applied to the odometry (hal/ros; 0 for backends without one), and the
+  // last one's jump: how far it moved the pose staad plans with.
+  std::uint64_t localization_fixes = 0;
+  std::uint64_t localization_dropped = 0;  // fixes refused: NaN, or older than the odometry kept
+  double last_jump_m = 0.0;
+  double last_jump_rad = 0.0;
 };
 
 struct VelocityCommand {
@@ -52,6 +61,7 @@ struct VelocityCommand {
   double v = 0.0;
   double w = 0.0;
   bool brake = false;    // a stop command: v = w = 0 with the base's full deceleration
+  rt::Nanos odometry_stamp = -1;  // the odometry it was computed from (Odometry::stamp)
 };
 
 // When the base last handed a command frame over to its transport (hal/socketcan: when

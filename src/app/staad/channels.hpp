@@ -8,6 +8,8 @@
 //   control    --command-->    base                                 (triple buffer)
 //   control    --status-->     service                              (triple buffer)
 //   control    --telemetry-->  service                              (SPSC ring)
+//   service    --maps-->       control   --retired_maps--> service  (SPSC rings, ROS maps)
+//   control    --plan-->       service                              (triple buffer, RViz)
 //   each RT thread --*_log-->  service                              (SPSC rings)
 //
 // heartbeat counts control cycles (the watchdog pings only while it advances); shutdown
@@ -16,6 +18,8 @@
 
 #include "app/staad/status.hpp"
 #include "app/staad/telemetry.hpp"
+#include "control/control_cycle.hpp"
+#include "map/polygon_map.hpp"
 #include "hal/base.hpp"
 #include "hal/obstacles.hpp"
 #include "rt/log_ring.hpp"
@@ -25,6 +29,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 
 namespace staa::staad {
 
@@ -45,6 +50,37 @@ struct CommandSlot {
   hal::VelocityCommand next;
 };
 
+// A map from ROS (map_server's /map) with the control cycle built on it, made outside the
+// real-time threads; the control thread swaps it in at a cycle boundary (a pointer), and
+// hands the one it replaced back to be freed there.
+struct MapBundle {
+  std::uint64_t sequence = 0;  // 1, 2, ... in the order they were built
+  PolygonMap map;
+  std::unique_ptr<ControlCycle> cycle;
+};
+using MapRing = rt::SpscRing<MapBundle*, 4>;
+
+// What RViz draws of one cycle (the ROS bridge turns it into markers), copied by the control
+// thread into fixed arrays when asked for (plan_wanted): no allocation.
+struct PlanSnapshot {
+  static constexpr std::size_t kMaxPath = 512;
+  static constexpr std::size_t kMaxTrajectory = 64;
+  static constexpr std::size_t kMaxTreeEdges = 4096;
+  rt::Nanos stamp = -1;
+  Pose2 robot;
+  std::array<Vec2, kMaxPath> path{};
+  std::size_t path_n = 0;
+  std::array<Pose2, kMaxTrajectory> trajectory{};
+  std::size_t trajectory_n = 0;
+  bool has_subgoal = false;
+  Pose2 subgoal;
+  std::array<hal::ObstacleFrame::Obstacle, hal::ObstacleFrame::kMaxObstacles> obstacles{};
+  std::size_t obstacles_n = 0;
+  double horizon_s = 0.0;  // how far ahead the predicted obstacles are drawn
+  std::array<std::array<Vec2, 2>, kMaxTreeEdges> tree{};
+  std::size_t tree_n = 0;  // 0: this snapshot carries no tree
+};
+
 struct Channels {
   explicit Channels(std::size_t telemetry_records) : telemetry(telemetry_records) {}
   Channels(const Channels&) = delete;
@@ -60,6 +96,12 @@ struct Channels {
   rt::LogRing control_log;
   rt::LogRing base_log;
   rt::LogRing perception_log;
+  MapRing maps;
+  MapRing retired_maps;
+  std::atomic<std::uint64_t> maps_taken{0};
+  rt::TripleBuffer<PlanSnapshot> plan;
+  std::atomic<bool> plan_wanted{false};
+  std::atomic<std::uint32_t> plan_tree_every{0};  // a tree in every n-th snapshot (0: never)
   std::atomic<std::uint64_t> heartbeat{0};
   std::atomic<bool> shutdown{false};
   // service -> control: the next cycle busy-waits this long (ms; 0: none), then clears it.

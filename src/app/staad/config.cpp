@@ -84,7 +84,11 @@ void readRobotAndMap(const ConfigValue& root, DaemonConfig& config) {
   config.robot_file = robot.path().lexically_normal();
   config.robot = loadNamedFile(robot, config.robot_file, [](const fs::path& f) { return loadRobotProfile(f); });
 
-  const ConfigValue map = root.required("map", "the polygon map file, staa-polygon-map/1");
+  const ConfigValue map = root.required("map", "the polygon map file, staa-polygon-map/1, or ros (the map from ros.map.topic)");
+  if (map.node().IsScalar() && map.node().Scalar() == "ros") {
+    config.map_from_ros = true;  // the map arrives at start-up (RosBridge::waitFirstMap)
+    return;
+  }
   config.map_file = map.path().lexically_normal();
   config.map = loadNamedFile(map, config.map_file, [](const fs::path& f) { return loadPolygonMap(f); });
 }
@@ -177,7 +181,7 @@ void readCamera(const ConfigValue& root, DaemonConfig& config) {
                   "the Xtion)");
   }
   CameraConfig& c = config.camera;
-  c.backend = camera.required("backend", "sim or openni2").choice<CameraBackend>(kCameraBackends);
+  c.backend = camera.required("backend", "sim, openni2 or ros").choice<CameraBackend>(kCameraBackends);
   if (const ConfigValue n = camera.get("uri"); n.given()) {
     c.uri = n.present() ? n.string("an OpenNI2 device URI, or \"\" for any device") : std::string();
   }
@@ -314,6 +318,115 @@ void readSocketCan(const ConfigValue& root, const fs::path& base, DaemonConfig& 
       loadNamedFile(profile, config.socketcan.profile_file, [](const fs::path& f) { return hal::loadCanProfile(f); });
 }
 
+// A ROS graph resource name as ros::names::validate takes it: a letter, '/' or '~' first, then
+// letters, digits, '_' and '/'. An empty one turns its feature off where the key allows it.
+bool validRosName(std::string_view name) {
+  if (name.empty()) return false;
+  const unsigned char first = static_cast<unsigned char>(name[0]);
+  if (!(std::isalpha(first) || name[0] == '/' || name[0] == '~')) return false;
+  return std::all_of(name.begin() + 1, name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/';
+  });
+}
+
+void readRos(const ConfigValue& root, DaemonConfig& config) {
+  const ConfigValue ros = root.section("ros", {"master_uri", "node_name", "master_wait_s", "frames", "base", "localization",
+                                              "goals", "map", "camera", "markers", "diagnostics"});
+  RosConfig& r = config.ros;
+  ros::TransportConfig& t = r.transport;
+  const bool camera_ros = config.obstacles == ObstacleSource::kDepth && config.camera.backend == CameraBackend::kRos;
+  r.enabled = ros.given() || config.hal == HalBackend::kRos || config.map_from_ros || camera_ros;
+  // A name, or "" for off where `may_be_off`.
+  auto name = [](const ConfigValue& section, std::string_view key, std::string& out, bool may_be_off) {
+    const ConfigValue n = section.get(key);
+    if (!n.given()) return;
+    const std::string text = n.present() ? n.string("a ROS name such as /hsrb/odom") : std::string();
+    if (text.empty() && may_be_off) {
+      out.clear();
+      return;
+    }
+    if (!validRosName(text)) {
+      n.fail("expected a ROS name (a letter, '/' or '~' first, then letters, digits, '_' and '/')" +
+             std::string(may_be_off ? ", or \"\" for off" : "") + ", got " + n.described());
+    }
+    out = text;
+  };
+  auto positive = [](const ConfigValue& section, std::string_view key, double& out, const char* unit) {
+    if (const ConfigValue n = section.get(key); n.given()) out = n.number(Range::above(0.0, unit));
+  };
+  auto rate = [](const ConfigValue& section, std::string_view key, double& out) {
+    if (const ConfigValue n = section.get(key); n.given()) out = n.number(Range::closed(0.0, kMaxRateHz, "Hz", "0: off"));
+  };
+  if (const ConfigValue n = ros.get("master_uri"); n.given()) {
+    t.master_uri = n.present() ? n.string("http://host:port, or \"\" for $ROS_MASTER_URI") : std::string();
+    if (!t.master_uri.empty() && t.master_uri.rfind("http://", 0) != 0) {
+      n.fail("expected http://host:port (or \"\" for $ROS_MASTER_URI), got " + n.described());
+    }
+  }
+  name(ros, "node_name", t.node_name, false);
+  if (t.node_name.find('/') != std::string::npos) ros.get("node_name").fail("a node name has no '/', got " + t.node_name);
+  positive(ros, "master_wait_s", t.master_wait_s, "s");
+
+  const ConfigValue frames = ros.section("frames", {"map", "base"});
+  name(frames, "map", t.map_frame, false);
+  name(frames, "base", t.base_frame, false);
+
+  const ConfigValue base = ros.section("base", {"cmd_vel", "odom", "queue_size"});
+  name(base, "cmd_vel", t.cmd_vel_topic, false);
+  name(base, "odom", t.odom_topic, false);
+  if (const ConfigValue n = base.get("queue_size"); n.given()) t.queue_size = static_cast<int>(n.integer(1, 100));
+
+  const ConfigValue loc = ros.section("localization", {"source", "topic", "tf_hz"});
+  if (const ConfigValue n = loc.get("source"); n.given()) {
+    static constexpr io::Choice<ros::LocalizationSource> kSources[] = {
+        {"pose", ros::LocalizationSource::kPoseStamped, "geometry_msgs/PoseStamped on localization.topic"},
+        {"pose_with_covariance", ros::LocalizationSource::kPoseWithCovarianceStamped,
+         "geometry_msgs/PoseWithCovarianceStamped on localization.topic"},
+        {"tf", ros::LocalizationSource::kTf, "tf from frames.map to frames.base"},
+        {"none", ros::LocalizationSource::kNone, "odometry is the map frame"}};
+    t.localization = n.choice<ros::LocalizationSource>(kSources);
+  }
+  name(loc, "topic", t.localization_topic, false);
+  positive(loc, "tf_hz", t.tf_localization_hz, "Hz");
+
+  const ConfigValue goals = ros.section("goals", {"action", "simple_goal", "tf_timeout_s"});
+  name(goals, "action", t.action_name, true);
+  name(goals, "simple_goal", t.simple_goal_topic, true);
+  positive(goals, "tf_timeout_s", t.goal_tf_timeout_s, "s");
+
+  const ConfigValue map = ros.section("map", {"topic", "wait_s", "occupied_thresh", "free_thresh", "simplify_m"});
+  name(map, "topic", t.map_topic, false);
+  positive(map, "wait_s", r.map_wait_s, "s");
+  if (const ConfigValue n = map.get("occupied_thresh"); n.given()) r.occupied_thresh = n.number(Range::closed(0.0, 1.0, {}));
+  if (const ConfigValue n = map.get("free_thresh"); n.given()) r.free_thresh = n.number(Range::closed(0.0, 1.0, {}));
+  if (!(r.free_thresh < r.occupied_thresh)) {
+    map.failAtKey("free_thresh (" + number(r.free_thresh) + ") must be below occupied_thresh (" + number(r.occupied_thresh) + ")");
+  }
+  if (const ConfigValue n = map.get("simplify_m"); n.given()) r.simplify_m = n.number(Range::atLeast(0.0, "m", "0: every cell corner"));
+
+  const ConfigValue camera = ros.section("camera", {"image", "info", "tf_timeout_s"});
+  name(camera, "image", t.image_topic, false);
+  name(camera, "info", t.camera_info_topic, false);
+  positive(camera, "tf_timeout_s", t.camera_tf_timeout_s, "s");
+
+  const ConfigValue markers = ros.section("markers", {"topic", "rate_hz", "tree_hz"});
+  name(markers, "topic", t.markers_topic, false);
+  rate(markers, "rate_hz", r.markers_hz);
+  rate(markers, "tree_hz", r.tree_hz);
+  const ConfigValue diagnostics = ros.section("diagnostics", {"topic", "rate_hz"});
+  name(diagnostics, "topic", t.diagnostics_topic, false);
+  rate(diagnostics, "rate_hz", r.diagnostics_hz);
+
+  // The simulated world is anchored in the map the config names: it cannot wait for one.
+  if (config.map_from_ros) {
+    const bool sim_camera = config.obstacles == ObstacleSource::kDepth && config.camera.backend == CameraBackend::kSim;
+    if (config.hal == HalBackend::kSim || config.obstacles == ObstacleSource::kSim || sim_camera) {
+      root.get("map").fail("map: ros needs a real base and real obstacles (hal: ros or socketcan; obstacles: depth with a "
+                           "real camera, or none): the simulated world is built on a map file");
+    }
+  }
+}
+
 void readDebug(const ConfigValue& root, DaemonConfig& config) {
   const ConfigValue debug = root.section("debug", {"faults"});
   if (const ConfigValue n = debug.get("faults"); n.given()) config.debug_faults = n.boolean();
@@ -428,7 +541,8 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   const fs::path base = (ec ? source : absolute).parent_path();
   const io::ConfigDocument doc = io::ConfigDocument::parse(yaml_text, source.string(), base);
   const ConfigValue& root = doc.root(kFormat, {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "camera", "rates",
-                                               "budget", "threads", "socket", "limits", "goal", "telemetry", "memory", "debug"});
+                                               "budget", "threads", "socket", "limits", "goal", "telemetry", "memory", "debug",
+                                               "ros"});
   DaemonConfig config;
   config.file = source;
   if (const ConfigValue hal = root.get("hal"); hal.given()) config.hal = hal.choice<HalBackend>(kHalBackends);
@@ -449,6 +563,7 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   readTelemetry(root, config);
   readMemory(root, config);
   readDebug(root, config);
+  readRos(root, config);
   config.control.rate_hz = config.control_hz;
   return config;
 }

@@ -8,7 +8,7 @@
 //   format: staad-config/1
 //   robot: ../robots/paper-agent.yaml        # staa-robot/1
 //   map: ../maps/office.yaml                 # staa-polygon-map/1
-//   hal: sim                                 # sim | socketcan
+//   hal: sim                                 # sim | socketcan | ros
 //   sim: {start: [1.5, 4.5, 0.0], movers: 3, mover_speed: 0.8, seed: 1}
 //   socketcan: {interface: can0, profile: can/hsr_base.yaml}  # hal: socketcan ("unix:/path" in tests)
 //   obstacles: sim                           # sim (the simulator's movers) | depth | none
@@ -34,6 +34,20 @@
 //   telemetry: {path: "", records: 4096, svg: ""}  # empty path: off; svg: the run's picture
 //   memory: {heap_prefault_mb: 64, stack_prefault_kb: 256}
 //   debug: {faults: false}                   # true: the socket's fault-injection requests (tests)
+//   ros:                                     # the ROS link (docs/ros.md; HSR ROS 1 defaults)
+//     master_uri: ""                         # empty: $ROS_MASTER_URI
+//     node_name: staad
+//     master_wait_s: 10
+//     frames: {map: map, base: base_footprint}
+//     base: {cmd_vel: /hsrb/command_velocity, odom: /hsrb/odom, queue_size: 1}
+//     localization: {source: pose, topic: /global_pose, tf_hz: 10}  # pose | pose_with_covariance | tf | none
+//     goals: {action: move_base, simple_goal: /move_base_simple/goal, tf_timeout_s: 0.2}  # "": off
+//     map: {topic: /map, wait_s: 30, occupied_thresh: 0.65, free_thresh: 0.196, simplify_m: 0.05}
+//     camera: {image: /hsrb/head_rgbd_sensor/depth_registered/image_rect_raw,
+//              info: /hsrb/head_rgbd_sensor/depth_registered/camera_info, tf_timeout_s: 0.05}
+//     markers: {topic: /staad/markers, rate_hz: 10, tree_hz: 1}
+//     diagnostics: {topic: /diagnostics, rate_hz: 1}
+//   map: ros                                 # instead of a file: the latched map on ros.map.topic
 
 #include "control/control_cycle.hpp"
 #include "robot/robot_profile.hpp"
@@ -44,6 +58,7 @@
 #include "perception/depth_obstacles.hpp"
 #include "rt/realtime.hpp"
 #include "io/config_rules.hpp"
+#include "app/staad/ros/transport.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -58,8 +73,10 @@ using ConfigError = io::ConfigError;
 
 // The selectors, parsed at the edge (the file, --hal) and compared as enums from then on.
 // hal: the base staad drives.
-enum class HalBackend { kSim, kSocketCan };
-inline constexpr io::Choice<HalBackend> kHalBackends[] = {{"sim", HalBackend::kSim}, {"socketcan", HalBackend::kSocketCan}};
+enum class HalBackend { kSim, kSocketCan, kRos };
+inline constexpr io::Choice<HalBackend> kHalBackends[] = {{"sim", HalBackend::kSim},
+                                                          {"socketcan", HalBackend::kSocketCan},
+                                                          {"ros", HalBackend::kRos, "the base over ROS: the ros section"}};
 // obstacles: where the moving obstacles come from.
 enum class ObstacleSource { kSim, kDepth, kNone };
 inline constexpr io::Choice<ObstacleSource> kObstacleSources[] = {
@@ -67,14 +84,15 @@ inline constexpr io::Choice<ObstacleSource> kObstacleSources[] = {
     {"depth", ObstacleSource::kDepth, "a depth camera: the camera section"},
     {"none", ObstacleSource::kNone, "no obstacle sensor: empty frames"}};
 // camera.backend: where the depth frames come from.
-enum class CameraBackend { kSim, kOpenNI2 };
+enum class CameraBackend { kSim, kOpenNI2, kRos };
 inline constexpr io::Choice<CameraBackend> kCameraBackends[] = {
     {"sim", CameraBackend::kSim, "frames rendered from the simulated world"},
-    {"openni2", CameraBackend::kOpenNI2, "the Xtion"}};
+    {"openni2", CameraBackend::kOpenNI2, "the Xtion"},
+    {"ros", CameraBackend::kRos, "sensor_msgs/Image over ROS: ros.camera"}};
 
-std::string_view toString(HalBackend hal);          // "sim", "socketcan"
+std::string_view toString(HalBackend hal);          // "sim", "socketcan", "ros"
 std::string_view toString(ObstacleSource obstacles);  // "sim", "depth", "none"
-std::string_view toString(CameraBackend backend);   // "sim", "openni2"
+std::string_view toString(CameraBackend backend);   // "sim", "openni2", "ros"
 
 // hal: socketcan: the base over SocketCAN (hal/socketcan).
 struct SocketCanConfig {
@@ -97,15 +115,32 @@ struct CameraConfig {
   DepthObstaclesConfig perception;   // camera.perception (stride = pixel_stride)
 };
 
+// The ros section (docs/ros.md): topics, frames and rates of the ROS link. Defaults are the
+// HSR-B's ROS 1 names. The link runs when the section is given or anything is taken over ROS
+// (hal: ros, map: ros, camera.backend: ros); goals, markers and diagnostics come with it.
+struct RosConfig {
+  bool enabled = false;
+  ros::TransportConfig transport;
+  double map_wait_s = 30.0;  // map: ros: how long start-up waits for the first map
+  double occupied_thresh = 0.65;  // map_server's defaults, as staa-map import
+  double free_thresh = 0.196;
+  double simplify_m = 0.05;
+  double markers_hz = 10.0;  // 0: no markers
+  double tree_hz = 1.0;      // the search tree in the markers (0: never)
+  double diagnostics_hz = 1.0;
+};
+
 struct DaemonConfig {
   std::filesystem::path file;        // where it was loaded from
   std::filesystem::path robot_file;
   RobotProfile robot;
-  std::filesystem::path map_file;
-  PolygonMap map;
+  std::filesystem::path map_file;    // empty with map: ros
+  PolygonMap map;                    // map: ros: the first map from the topic (set at start-up)
+  bool map_from_ros = false;         // map: ros (ros.map.topic)
   HalBackend hal = HalBackend::kSim;
   hal::SimHalConfig sim;              // hal: sim, obstacles: sim, or obstacles: depth with camera.backend: sim
   SocketCanConfig socketcan;          // hal: socketcan
+  RosConfig ros;                      // the ROS link
   ObstacleSource obstacles = ObstacleSource::kSim;  // the sim world's movers | camera | empty frames
   CameraConfig camera;                // obstacles: depth
   double control_hz = 30.0;

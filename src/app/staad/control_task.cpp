@@ -82,8 +82,26 @@ ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, rt::Clo
       obstacles_timeout_(secondsToNanos(config.obstacles_timeout_s)),
       budget_(budgetOf(config, clock)),
       limits_(config.robot.limits),
-      cycle_(config.map, config.robot, controlConfigOf(config)),
-      obstacles_(cycle_.obstacleCapacity()) {}
+      own_cycle_(config.map, config.robot, controlConfigOf(config)),
+      cycle_(&own_cycle_),
+      obstacles_(own_cycle_.obstacleCapacity()) {}
+
+ControlConfig controlConfigFor(const DaemonConfig& config) { return controlConfigOf(config); }
+
+// 0. A map built on the service side replaces the current one between two cycles: the new
+// cycle takes the goal; the replaced bundle goes back to be freed there (never here). Taken
+// only when the way back has room, so that nothing is ever freed on this thread.
+void ControlTask::takeMap(rt::Nanos now) {
+  if (ch_.maps.size() == 0 || ch_.retired_maps.size() >= MapRing::capacity()) return;
+  MapBundle* next = nullptr;
+  if (!ch_.maps.pop(next) || next == nullptr) return;
+  if (map_ != nullptr) ch_.retired_maps.push(map_);
+  map_ = next;
+  cycle_ = map_->cycle.get();
+  if (has_goal_) cycle_->setGoal(goal_);
+  ch_.maps_taken.fetch_add(1, std::memory_order_release);
+  log(now, rt::LogLevel::kInfo, "map swapped in (sequence)", static_cast<double>(map_->sequence), 0.0, 0.0, 1);
+}
 
 void ControlTask::log(rt::Nanos now, rt::LogLevel level, const char* message, double a, double b, double c,
                       std::uint8_t count) {
@@ -96,7 +114,7 @@ void ControlTask::takeRequests(rt::Nanos now) {
     shutdown_ = true;
     stopped_ = true;
     has_goal_ = false;
-    cycle_.clearGoal();
+    cycle_->clearGoal();
     log(now, rt::LogLevel::kInfo, "shutting down: braking to standstill");
   }
   Request request;
@@ -104,7 +122,7 @@ void ControlTask::takeRequests(rt::Nanos now) {
     if (shutdown_) continue;  // stopping: the robot stays braked
     switch (request.kind) {
       case RequestKind::kGoal:
-        cycle_.setGoal(request.pose);
+        cycle_->setGoal(request.pose);
         has_goal_ = true;
         goal_ = request.pose;
         goal_id_ = request.goal_id;
@@ -113,7 +131,7 @@ void ControlTask::takeRequests(rt::Nanos now) {
             3);
         break;
       case RequestKind::kStop:
-        cycle_.clearGoal();
+        cycle_->clearGoal();
         has_goal_ = false;
         stopped_ = true;
         log(now, rt::LogLevel::kInfo, "stop requested: braking, goal dropped");
@@ -203,6 +221,7 @@ void ControlTask::setState(rt::Nanos now, DaemonState state, FaultKind fault) {
 
 void ControlTask::step(rt::Nanos now) {
   flushTelemetry();  // the previous cycle's record, now that its overrun is known
+  takeMap(now);
   takeRequests(now);
   forcedOverrun(now);
   takeInputs();
@@ -224,12 +243,13 @@ void ControlTask::step(rt::Nanos now) {
     CycleInputs in;
     in.robot = UnicycleState{odo.pose.x, odo.pose.y, odo.pose.theta, odo.v, odo.w};
     in.obstacles = &obstacles_;
-    out = cycle_.step(in, budget_);
+    out = cycle_->step(in, budget_);
     setState(now, fromCycleState(out.state), fault);
     publishCommand(now, &out);
   }
   ++cycles_;
   publishStatus(now);
+  if (ch_.plan_wanted.load(std::memory_order_relaxed)) publishPlan(now, out);
 
   // 7. This cycle's telemetry record (pushed at the start of the next cycle), whether or not
   // a telemetry file is written: the service thread also keeps the poses for the picture.
@@ -282,6 +302,9 @@ void ControlTask::publishCommand(rt::Nanos now, const CycleOutput* out) {
       slot.next = brakeCommand(now);
     }
   }
+  // The odometry this command was planned on: the ROS link's odometry-to-twist latency.
+  slot.command.odometry_stamp = base_.odometry.stamp;
+  slot.next.odometry_stamp = base_.odometry.stamp;
   last_command_ = slot;
   ch_.command.publish();
 }
@@ -309,6 +332,43 @@ void ControlTask::publishStatus(rt::Nanos now) {
   s.time_s = static_cast<double>(now) * 1e-9;
   last_status_ = s;
   ch_.status.publish();
+}
+
+// 6b. What RViz draws, copied into the snapshot's fixed arrays (cut at their sizes).
+void ControlTask::publishPlan(rt::Nanos now, const CycleOutput& out) {
+  PlanSnapshot& p = ch_.plan.writeBuffer();
+  p.stamp = now;
+  p.robot = base_.odometry.pose;
+  const std::span<const Vec2> path = cycle_->lastPath();
+  p.path_n = std::min(path.size(), PlanSnapshot::kMaxPath);
+  std::copy_n(path.begin(), p.path_n, p.path.begin());
+  p.trajectory_n = 0;
+  if (out.planned) {
+    for (const UnicycleState& s : out.plan.trajectory) {
+      if (p.trajectory_n == PlanSnapshot::kMaxTrajectory) break;
+      p.trajectory[p.trajectory_n++] = Pose2{s.x, s.y, s.theta};
+    }
+  }
+  p.has_subgoal = out.state == CycleState::kDriving;
+  p.subgoal = cycle_->localMap().intermediateGoal().pose;
+  p.obstacles_n = 0;
+  for (std::size_t i = 0; i < obstacles_.size() && p.obstacles_n < p.obstacles.size(); ++i) {
+    hal::ObstacleFrame::Obstacle& o = p.obstacles[p.obstacles_n++];
+    const FixedPolygon& poly = obstacles_.observed(i);
+    o.n = std::min(poly.n, hal::ObstacleFrame::kMaxVertices);
+    std::copy_n(poly.v.begin(), o.n, o.vertices.begin());
+    o.velocity = obstacles_.velocity(i);
+    o.turn_rate = obstacles_.turnRate(i);
+  }
+  p.horizon_s = 1.0;
+  p.tree_n = 0;
+  const std::uint32_t every = ch_.plan_tree_every.load(std::memory_order_relaxed);
+  if (every > 0 && out.planned && cycles_ % every == 0) {
+    cycle_->planner().forEachEdge([&p](const UnicycleState& a, const UnicycleState& b) {
+      if (p.tree_n < PlanSnapshot::kMaxTreeEdges) p.tree[p.tree_n++] = {Vec2{a.x, a.y}, Vec2{b.x, b.y}};
+    });
+  }
+  ch_.plan.publish();
 }
 
 void ControlTask::flushTelemetry() {

@@ -4,6 +4,7 @@
 // step it in lockstep on a manual time line.
 //
 // step(now), top to bottom:
+//   0. a new map (from ROS) swapped in: the cycle built on it replaces the current one;
 //   1. requests from the service thread: goal, stop, pose (forwarded to the base thread);
 //      a forced overrun (debug.faults, tests) busy-waits here;
 //   2. the latest odometry + base status, and the latest obstacle frame;
@@ -13,6 +14,7 @@
 //   4. ControlCycle::step with the planner budget (wall clock or expansions);
 //   5. the command (and the plan's next action, the base thread's fallback) published;
 //   6. the status published;
+//   6b. with plan_wanted, the plan's snapshot for RViz;
 //   7. a telemetry record (always: the service thread writes the CSV file and/or keeps the
 //      poses for the run's SVG picture), and log records on state changes and faults.
 // No allocation, no lock, no I/O: everything is sized by the constructor.
@@ -60,11 +62,15 @@ class ControlTask final : public rt::Runnable {
   const CycleOutput& lastOutput() const { return last_output_; }
   std::uint64_t cycles() const { return cycles_; }
   rt::Nanos period() const { return period_; }
-  ControlCycle& controlCycle() { return cycle_; }
+  ControlCycle& controlCycle() { return *cycle_; }
+  // The map the cycle plans on: 0 the config's, else the MapBundle's sequence.
+  std::uint64_t mapSequence() const { return map_ != nullptr ? map_->sequence : 0; }
   // The moving obstacles the last cycle planned against (the latest obstacle frame's).
   const DynamicObstacleSet& obstacles() const { return obstacles_; }
 
  private:
+  void takeMap(rt::Nanos now);
+  void publishPlan(rt::Nanos now, const CycleOutput& out);
   void takeRequests(rt::Nanos now);
   void forcedOverrun(rt::Nanos now);
   void takeInputs();
@@ -83,7 +89,9 @@ class ControlTask final : public rt::Runnable {
   PlannerBudget budget_;
   MotionLimits limits_;
 
-  ControlCycle cycle_;
+  ControlCycle own_cycle_;      // on the config's map
+  ControlCycle* cycle_;         // own_cycle_ or map_->cycle
+  MapBundle* map_ = nullptr;    // the ROS map swapped in last (owned by the service side)
   DynamicObstacleSet obstacles_;
   std::array<PolygonView, hal::ObstacleFrame::kMaxObstacles> views_{};
   std::array<Vec2, hal::ObstacleFrame::kMaxObstacles> velocities_{};
@@ -113,6 +121,10 @@ class ControlTask final : public rt::Runnable {
   bool has_pending_ = false;
   std::uint64_t overruns_seen_ = 0;
 };
+
+// The control cycle's configuration staad runs with (the ROS bridge builds new maps' cycles
+// with it).
+ControlConfig controlConfigFor(const DaemonConfig& config);
 
 // The command that stops the robot: v = w = 0 with the base's full deceleration.
 hal::VelocityCommand brakeCommand(rt::Nanos stamp);

@@ -4,6 +4,9 @@
 #include "app/staad/control_task.hpp"
 #include "app/staad/depth_sensor.hpp"
 #include "app/staad/io_tasks.hpp"
+#ifdef STAA_HAVE_ROS1
+#include "app/staad/ros_bridge.hpp"
+#endif
 #include "app/staad/service.hpp"
 #include "world/sim_hal.hpp"
 #include "hal/socketcan/socketcan.hpp"
@@ -46,6 +49,9 @@ class Daemon {
 
  private:
   void createWorkspaces();
+  void createRosLink();
+  void startRosLink();
+  hal::Base* rosBase();
   void startThreads();
   // Starts the thread that steps `runnable` at `hz`, as `activity`.
   void startActivity(std::unique_ptr<rt::PeriodicActivity>& activity, const char* name, rt::Runnable& runnable,
@@ -69,6 +75,9 @@ class Daemon {
   std::unique_ptr<OdometryTap> odometry_tap_;       // ... published by the base thread
   std::unique_ptr<DepthSensor> depth_;              // obstacles: depth
   std::unique_ptr<Channels> channels_;
+#ifdef STAA_HAVE_ROS1
+  std::unique_ptr<RosBridge> ros_;                  // the ROS link (config ros)
+#endif
   std::unique_ptr<ControlTask> task_;
   std::unique_ptr<BaseTask> base_task_;
   std::unique_ptr<PerceptionTask> perception_task_;
@@ -88,6 +97,10 @@ void Daemon::createWorkspaces() {
   } catch (const std::exception& e) {
     throw ConfigError(e.what());
   }
+
+  channels_ = std::make_unique<Channels>(config_.telemetry_records);
+  createRosLink();
+  startRosLink();  // before anything is built on the map
 
   const rt::Nanos now = clock_.now();
   // The simulated world: the base with hal: sim; the movers (the simulated camera) with
@@ -117,6 +130,8 @@ void Daemon::createWorkspaces() {
       throw DeviceError(message);
     }
     base = can_base_.get();
+  } else if (config_.hal == HalBackend::kRos) {
+    base = rosBase();
   } else {
     base = &sim_->base();
   }
@@ -145,8 +160,10 @@ void Daemon::createWorkspaces() {
     no_obstacles_ = std::make_unique<NoObstacles>();
     obstacles = no_obstacles_.get();
   }
-  channels_ = std::make_unique<Channels>(config_.telemetry_records);
   task_ = std::make_unique<ControlTask>(config_, *channels_, clock_);
+#ifdef STAA_HAVE_ROS1
+  if (ros_) ros_->acceptMapsForControl();
+#endif
   base_task_ = std::make_unique<BaseTask>(*base, *channels_, periodOf(config_.control_hz));
   perception_task_ = std::make_unique<PerceptionTask>(*obstacles, *channels_);
 
@@ -158,7 +175,56 @@ void Daemon::createWorkspaces() {
   so.watchdog_interval = watchdog;
   so.debug_faults = config_.debug_faults;
   service_ = std::make_unique<Service>(*channels_, *notifier_, so, log_);
+#ifdef STAA_HAVE_ROS1
+  if (ros_) service_->completeStatusWith([this](Status& s) { ros_->fillStatus(s); });
+#endif
   service_->open();
+}
+
+// The ROS link's objects (the base backend of hal: ros among them); nothing starts yet.
+void Daemon::createRosLink() {
+  if (!config_.ros.enabled) return;
+#ifdef STAA_HAVE_ROS1
+  ros_ = std::make_unique<RosBridge>(config_, *channels_);
+#else
+  throw ConfigError(config_.file.string() +
+                    ": this staad was built without ROS (hal: ros, map: ros, camera.backend: ros or a ros section need "
+                    "the ROS 1 packages at build time: toolchain/install-deps.sh)");
+#endif
+}
+
+hal::Base* Daemon::rosBase() {
+#ifdef STAA_HAVE_ROS1
+  return ros_->base();
+#else
+  return nullptr;
+#endif
+}
+
+// The transport starts (no master: exit 3, like a missing bus); with map: ros the first map
+// is waited for here, before the control task is built on it.
+void Daemon::startRosLink() {
+#ifdef STAA_HAVE_ROS1
+  if (!ros_) return;
+  try {
+    ros_->start(nullptr);
+  } catch (const ros::TransportError& e) {
+    throw DeviceError(config_.file.string() + ": ros: " + e.what());
+  }
+  if (config_.map_from_ros) {
+    say("waiting for the map on " + config_.ros.transport.map_topic);
+    std::optional<PolygonMap> map =
+        ros_->waitFirstMap(static_cast<rt::Nanos>(config_.ros.map_wait_s * 1e9), log_);
+    if (!map) {
+      char wait[32];
+      std::snprintf(wait, sizeof wait, "%.1f", config_.ros.map_wait_s);
+      throw DeviceError(config_.file.string() + ": map: ros: no map that imports arrived on " +
+                        config_.ros.transport.map_topic + " within " + wait +
+                        " s (ros.map.wait_s; is map_server running and publishing it latched?)");
+    }
+    config_.map = std::move(*map);
+  }
+#endif
 }
 
 void Daemon::startActivity(std::unique_ptr<rt::PeriodicActivity>& activity, const char* name, rt::Runnable& runnable,
@@ -234,6 +300,9 @@ void Daemon::shutdown() {
   say(braked);
   service_->stopping();
   stopThreads();
+#ifdef STAA_HAVE_ROS1
+  if (ros_) ros_->stop();  // after the base thread's last command, a brake, went out
+#endif
   service_->drain();
   const Status& s = service_->latest();
   char line[160];
@@ -269,6 +338,7 @@ int Daemon::run() {
   {
     std::string hal(toString(config_.hal));
     if (config_.hal == HalBackend::kSocketCan) hal.append(" on ").append(config_.socketcan.interface);
+    if (config_.ros.enabled) hal.append(", ROS master ").append(config_.ros.transport.master_uri.empty() ? "$ROS_MASTER_URI" : config_.ros.transport.master_uri);
     hal.append(", obstacles ").append(toString(config_.obstacles));
     char line[512];
     std::snprintf(line, sizeof line, "ready: hal %s, control %.0f Hz (%s), base %.0f Hz, perception %.0f Hz, socket %s",
@@ -279,6 +349,9 @@ int Daemon::run() {
   }
 
   while (!service_->runOnce(clock_.now(), kServicePollMs)) {
+#ifdef STAA_HAVE_ROS1
+    if (ros_) ros_->poll(clock_.now(), *service_, log_);
+#endif
   }
   shutdown();
   return kExitOk;

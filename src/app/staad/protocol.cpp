@@ -294,7 +294,27 @@ Json baseJson(const hal::BaseStatus& b) {
           {"enabled", b.enabled},
           {"bad_frames", b.bad_frames},
           {"rx_overflows", b.rx_overflows},
-          {"error_frames", b.error_frames}};
+          {"error_frames", b.error_frames},
+          {"localization", {{"fixes", b.localization_fixes},
+                            {"dropped", b.localization_dropped},
+                            {"last_jump_m", b.last_jump_m},
+                            {"last_jump_rad", b.last_jump_rad}}}};
+}
+
+Json rosJson(const RosLinkStatus& r) {
+  if (!r.enabled) return nullptr;
+  Json latency = timingJson(r.odometry_to_twist);
+  latency["count"] = r.odometry_to_twist.count;
+  return {{"master", r.master},
+          {"odometry_to_twist", latency},
+          {"odometry_in", r.odometry_in},
+          {"localization_in", r.localization_in},
+          {"twists_out", r.twists_out},
+          {"goals_in", r.goals_in},
+          {"goals_refused", r.goals_refused},
+          {"maps", {{"in", r.maps_in}, {"applied", r.maps_applied}, {"refused", r.maps_refused},
+                    {"import_s", r.map_import_s}}},
+          {"images", {{"in", r.images_in}, {"dropped", r.images_dropped}}}};
 }
 
 Json commandToWireJson(const CommandToWire& w) {
@@ -347,6 +367,7 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
   j["staleness"] = {{"odometry_s", age(status.odometry_age_s)}, {"obstacles_s", age(status.obstacles_age_s)}};
   j["planner"] = {{"expansions", status.expansions}, {"depth", status.depth}};
   j["time_s"] = status.time_s;
+  j["ros"] = rosJson(status.ros);
   return j;
 }
 

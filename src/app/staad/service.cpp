@@ -103,6 +103,7 @@ const Status& Service::status() {
   if (control_activity_ != nullptr) status_.control_thread = control_activity_->timing();
   if (base_activity_ != nullptr) status_.base_thread = base_activity_->timing();
   if (base_task_ != nullptr) status_.command_to_wire = {base_task_->commandToWire().summary(), base_task_->commandsUnsent()};
+  if (complete_) complete_(status_);
   return status_;
 }
 
@@ -248,24 +249,24 @@ void Service::handleLine(Client& c, std::string_view line) {
     handleDebug(c, request);
     return;
   }
-  if (ch_.shutdown.load(std::memory_order_relaxed)) {
-    c.out.append(errorReply("staad is stopping"));
+  const Submitted submitted = submit(request);
+  if (!submitted.error.empty()) {
+    c.out.append(errorReply(submitted.error));
     return;
   }
+  c.out.append(request.kind == RequestKind::kGoal ? goalReply(submitted.goal_id) : okReply());
+}
+
+Service::Submitted Service::submit(const Request& request) {
+  if (ch_.shutdown.load(std::memory_order_relaxed)) return {0, "staad is stopping"};
   // A goal's id is given as it is queued: a refused goal takes none.
   Request queued = request;
   if (queued.kind == RequestKind::kGoal) queued.goal_id = last_goal_id_ + 1;
-  if (!ch_.requests.push(queued)) {
-    c.out.append(errorReply("busy: the control thread is not taking requests, try again"));
-    return;
-  }
-  if (queued.kind != RequestKind::kGoal) {
-    c.out.append(okReply());
-    return;
-  }
+  if (!ch_.requests.push(queued)) return {0, "busy: the control thread is not taking requests, try again"};
+  if (queued.kind != RequestKind::kGoal) return {0, {}};
   last_goal_id_ = queued.goal_id;
   if (!options_.svg_path.empty()) run_.addGoal(queued.goal_id, queued.pose);
-  c.out.append(goalReply(queued.goal_id));
+  return {queued.goal_id, {}};
 }
 
 void Service::handleDebug(Client& c, const Request& request) {

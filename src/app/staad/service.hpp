@@ -27,6 +27,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -72,6 +73,18 @@ class Service {
   // `cycle`) and the base thread's (`threads.base`), with the base task's command-to-wire
   // latency (`base.command_to_wire`). Read through their atomics; null: left empty.
   void watchTiming(const rt::PeriodicActivity* control, const rt::PeriodicActivity* base, const BaseTask* base_task);
+
+  // Fields of the status that another part of the daemon owns (the ROS link), filled in by
+  // `complete` whenever status() is asked for.
+  void completeStatusWith(std::function<void(Status&)> complete) { complete_ = std::move(complete); }
+
+  // Queues a goal, stop or pose request for the control thread, as the control socket does
+  // (goals are numbered here): the goal's id, or the reason it was refused.
+  struct Submitted {
+    std::uint64_t goal_id = 0;  // 0 for stop and pose
+    std::string error;          // empty: queued
+  };
+  Submitted submit(const Request& request);
 
   // READY=1 (and the first STATUS=); starts the watchdog pings.
   void ready(rt::Nanos now);
@@ -149,6 +162,7 @@ class Service {
   std::uint64_t telemetry_dropped_seen_ = 0;
   std::uint64_t last_goal_id_ = 0;  // the newest goal queued (ids start at 1)
   RunRecord run_;                   // kept only with an SVG path
+  std::function<void(Status&)> complete_;
 };
 
 }  // namespace staa::staad

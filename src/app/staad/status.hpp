@@ -32,6 +32,26 @@ struct CommandToWire {
   std::uint64_t unsent = 0;  // control commands replaced before any frame carried them
 };
 
+// The ROS link (hal: ros, camera.backend: ros, map: ros, goals over ROS), filled in by the
+// service thread from the ROS bridge; `enabled` false without one.
+struct RosLinkStatus {
+  bool enabled = false;
+  bool master = false;  // the master answered when last asked (at most once a second)
+  // From the stamp of the odometry a command was planned on to the twist's publication.
+  rt::TimingSummary odometry_to_twist;
+  std::uint64_t odometry_in = 0;
+  std::uint64_t localization_in = 0;
+  std::uint64_t twists_out = 0;
+  std::uint64_t goals_in = 0;
+  std::uint64_t goals_refused = 0;  // no transform to the map frame, not finite
+  std::uint64_t maps_in = 0;
+  std::uint64_t maps_applied = 0;   // swapped in at a cycle boundary
+  std::uint64_t maps_refused = 0;   // the import failed (the message names why in the log)
+  double map_import_s = 0.0;        // the last map's import and planner set-up
+  std::uint64_t images_in = 0;
+  std::uint64_t images_dropped = 0;
+};
+
 struct Status {
   DaemonState state = DaemonState::kIdle;
   Pose2 pose;
@@ -63,6 +83,8 @@ struct Status {
   // (0: none yet). It runs ahead of goal_id until the control thread takes that goal (within
   // one control period), so a client that just sent a goal knows which id to wait for.
   std::uint64_t queued_goal_id = 0;
+  // Set by the service thread: the ROS link.
+  RosLinkStatus ros;
 };
 
 enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus, kDebug };
