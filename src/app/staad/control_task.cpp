@@ -88,6 +88,13 @@ ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, rt::Clo
 
 ControlConfig controlConfigFor(const DaemonConfig& config) { return controlConfigOf(config); }
 
+std::unique_ptr<MapBundle> ControlTask::releaseMap() {
+  MapBundle* bundle = map_;
+  map_ = nullptr;
+  cycle_ = &own_cycle_;
+  return std::unique_ptr<MapBundle>(bundle);
+}
+
 // 0. A map built on the service side replaces the current one between two cycles: the new
 // cycle takes the goal; the replaced bundle goes back to be freed there (never here). Taken
 // only when the way back has room, so that nothing is ever freed on this thread.

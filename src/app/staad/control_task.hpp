@@ -65,6 +65,9 @@ class ControlTask final : public rt::Runnable {
   ControlCycle& controlCycle() { return *cycle_; }
   // The map the cycle plans on: 0 the config's, else the MapBundle's sequence.
   std::uint64_t mapSequence() const { return map_ != nullptr ? map_->sequence : 0; }
+  // The bundle swapped in last, handed back to be freed, the config's own cycle restored.
+  // Only once the control thread has stopped stepping this task.
+  std::unique_ptr<MapBundle> releaseMap();
   // The moving obstacles the last cycle planned against (the latest obstacle frame's).
   const DynamicObstacleSet& obstacles() const { return obstacles_; }
 

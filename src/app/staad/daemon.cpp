@@ -303,6 +303,7 @@ void Daemon::shutdown() {
 #ifdef STAA_HAVE_ROS1
   if (ros_) ros_->stop();  // after the base thread's last command, a brake, went out
 #endif
+  task_->releaseMap();  // the map swapped in last, freed now that no thread plans on it
   service_->drain();
   const Status& s = service_->latest();
   char line[160];

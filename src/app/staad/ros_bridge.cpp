@@ -121,7 +121,11 @@ void RosBridge::stop() {
     if (base_->takeTwist(t)) transport_->publishTwist(t.v, t.w);
     transport_->publishTwist(0.0, 0.0);
   }
-  transport_.reset();
+  transport_.reset();  // the map thread ends with it
+  // The control thread has stopped: maps handed over but not taken, and the retired ones.
+  MapBundle* bundle = nullptr;
+  while (ch_.maps.pop(bundle)) delete bundle;
+  while (ch_.retired_maps.pop(bundle)) delete bundle;
   std::lock_guard<std::mutex> lock(maps_mutex_);
   pending_map_.reset();
 }

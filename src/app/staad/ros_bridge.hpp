@@ -67,7 +67,8 @@ class RosBridge final : public ros::MapSink {
   void poll(rt::Nanos now, Service& service, std::ostream& log);
   // The status's ros fields.
   void fillStatus(Status& status) const;
-  // Stops the publisher thread and the transport; frees the maps not taken.
+  // Stops the publisher thread and the transport; frees the maps not taken. After the
+  // real-time threads stopped.
   void stop();
 
   // ros::MapSink (the transport's map thread).

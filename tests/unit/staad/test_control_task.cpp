@@ -566,6 +566,71 @@ TEST(ControlTask, ThousandCyclesWithGoalChangesAndAStopAllocateNothing) {
   EXPECT_EQ(ls.task.cycles(), 1005u);
 }
 
+// A map from ROS swapped in while driving: the control thread takes the bundle at a cycle
+// boundary, keeps the goal, plans around what the new map adds, hands the replaced bundle
+// back, and neither the swap nor the plan snapshots for RViz allocate there.
+TEST(ControlTask, AMapSwappedInWhileDrivingIsPlannedOnAtOnceWithoutAllocating) {
+  ASSERT_TRUE(rt::hookInstalled());
+  const DaemonConfig config = officeConfig(100);
+  Lockstep ls(config);
+  ls.ch.plan_wanted.store(true);
+  ls.ch.plan_tree_every.store(3);
+  // The second map: the office with a pillar in the corridor between start and goal.
+  auto bundle = [&](std::uint64_t sequence, bool pillar) {
+    auto b = std::make_unique<MapBundle>();
+    b->sequence = sequence;
+    b->map = config.map;
+    if (pillar) b->map.obstacles.push_back({{6.3, 4.2}, {6.7, 4.2}, {6.7, 4.8}, {6.3, 4.8}});
+    b->cycle = std::make_unique<ControlCycle>(b->map, config.robot, controlConfigFor(config));
+    return b;
+  };
+  std::unique_ptr<MapBundle> first = bundle(1, true);
+  std::unique_ptr<MapBundle> second = bundle(2, false);
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(5);
+  EXPECT_EQ(ls.task.mapSequence(), 0u);
+
+  rt::resetRealtimeAllocations();
+  rt::markRealtimeThread(true);
+  ASSERT_TRUE(ls.ch.maps.push(first.get()));
+  ls.step();
+  EXPECT_EQ(ls.task.mapSequence(), 1u);
+  EXPECT_EQ(ls.ch.maps_taken.load(), 1u);
+  EXPECT_EQ(ls.task.state(), DaemonState::kDriving) << "the goal is kept across the swap";
+  MapBundle* retired = nullptr;
+  EXPECT_FALSE(ls.ch.retired_maps.pop(retired)) << "the config's own cycle is not handed back";
+  // The path now goes around the pillar: no path vertex lies inside it grown by the robot.
+  ls.steps(2);
+  const std::span<const Vec2> path = ls.task.controlCycle().lastPath();
+  ASSERT_GE(path.size(), 3u) << "a detour, not the straight corridor";
+  for (const Vec2& v : path) EXPECT_FALSE(v.x() > 6.1 && v.x() < 6.9 && v.y() > 4.0 && v.y() < 5.0) << v.transpose();
+  // The snapshot for RViz has the path, the trajectory and, every 3rd cycle, the tree.
+  ASSERT_TRUE(ls.ch.plan.update());
+  EXPECT_EQ(ls.ch.plan.readBuffer().path_n, path.size());
+  EXPECT_GT(ls.ch.plan.readBuffer().trajectory_n, 0u);
+  std::size_t trees = 0;
+  for (int k = 0; k < 6; ++k) {
+    ls.step();
+    if (ls.ch.plan.update()) trees += ls.ch.plan.readBuffer().tree_n > 0;
+  }
+  EXPECT_EQ(trees, 2u);
+  ASSERT_TRUE(ls.ch.maps.push(second.get()));
+  ls.step();
+  EXPECT_EQ(ls.task.mapSequence(), 2u);
+  ASSERT_TRUE(ls.ch.retired_maps.pop(retired));
+  EXPECT_EQ(retired, first.get()) << "the replaced bundle comes back to be freed outside the thread";
+  ls.steps(50);
+  rt::markRealtimeThread(false);
+  EXPECT_EQ(rt::realtimeAllocations(), 0u);
+  const int cycles = ls.stepUntil([&] { return ls.task.state() == DaemonState::kReached; }, 600);
+  EXPECT_EQ(ls.task.state(), DaemonState::kReached) << "after " << cycles << " more cycles";
+  // Once the thread has stopped, the daemon takes the last bundle back to free it.
+  std::unique_ptr<MapBundle> last = ls.task.releaseMap();
+  EXPECT_EQ(last.get(), second.get());
+  EXPECT_EQ(ls.task.mapSequence(), 0u);
+  last.release();  // `second` owns it
+}
+
 TEST(Telemetry, RowsFollowTheDocumentedHeader) {
   EXPECT_STREQ(telemetryHeader(), "t_s,x,y,theta,v,w,v_cmd,w_cmd,expansions,depth,budget_used_ms,overrun");
   TelemetryRecord r;

@@ -232,7 +232,7 @@ camera: {backend: sim}
   // The backend is not defaulted: a robot must never silently run on a simulated camera.
   const std::string missing = loadError(edited("  backend: sim\n", ""));
   EXPECT_THAT(missing, HasSubstr("camera.backend: missing"));
-  EXPECT_THAT(missing, HasSubstr("sim or openni2"));
+  EXPECT_THAT(missing, HasSubstr("sim, openni2 or ros"));
   const std::string no_section = loadError(R"(format: staad-config/1
 robot: robots/hsr.yaml
 map: maps/office.yaml

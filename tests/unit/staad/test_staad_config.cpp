@@ -232,7 +232,7 @@ TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
       {"svg: \"\"", "svgg: run.svg", {"telemetry.svgg", "unknown key", "path, records, svg"}},
       {"heap_prefault_mb: 64", "heap_prefault_mb: 5000", {"memory.heap_prefault_mb", "0..4096", "5000"}},
       {"stack_prefault_kb: 256", "stack_prefault_kb: -4", {"memory.stack_prefault_kb", "-4"}},
-      {"hal: sim", "hal: can", {"hal", "sim or socketcan", "'can'"}},
+      {"hal: sim", "hal: can", {"hal", "sim, socketcan or ros", "'can'"}},
       {"hal: sim", "hal: socketcan", {"socketcan: missing", "socketcan.interface", "socketcan.profile"}},
       {"hal: sim", "hal: sim\nobstacles: camera", {"obstacles", "sim", "none", "'camera'"}},
       {"hal: sim", "hal: sim\ndebug: {faults: maybe}", {"debug.faults", "true or false", "'maybe'"}},
@@ -454,6 +454,107 @@ TEST_F(SocketCanConfig, BadValuesAreNamedWithTheirKeyAndLine) {
     for (const std::string& e : c.expected) EXPECT_THAT(error, HasSubstr(e));
     EXPECT_THAT(error, HasSubstr("staad.yaml:" + std::to_string(lineOf(text, "socketcan: ")) + ": "));
   }
+}
+
+// hal: ros and the ros section (docs/ros.md): the HSR's ROS 1 names by default.
+const std::string kRosConfig = R"(format: staad-config/1
+robot: robots/hsr.yaml
+map: ros
+hal: ros
+obstacles: none
+)";
+
+TEST_F(ConfigFiles, TheRosLinkDefaultsToTheHsrsRos1Names) {
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", kRosConfig));
+  EXPECT_EQ(c.hal, HalBackend::kRos);
+  EXPECT_TRUE(c.map_from_ros);
+  EXPECT_TRUE(c.map_file.empty());
+  EXPECT_TRUE(c.ros.enabled);
+  const ros::TransportConfig& t = c.ros.transport;
+  EXPECT_EQ(t.cmd_vel_topic, "/hsrb/command_velocity");
+  EXPECT_EQ(t.odom_topic, "/hsrb/odom");
+  EXPECT_EQ(t.localization, ros::LocalizationSource::kPoseStamped);
+  EXPECT_EQ(t.localization_topic, "/global_pose");
+  EXPECT_EQ(t.action_name, "move_base");
+  EXPECT_EQ(t.simple_goal_topic, "/move_base_simple/goal");
+  EXPECT_EQ(t.map_topic, "/map");
+  EXPECT_EQ(t.map_frame, "map");
+  EXPECT_EQ(t.base_frame, "base_footprint");
+  EXPECT_DOUBLE_EQ(c.ros.occupied_thresh, 0.65);
+  EXPECT_DOUBLE_EQ(c.ros.free_thresh, 0.196);
+  // Without any of it the link is off.
+  EXPECT_FALSE(loadDaemonConfig(write("sim.yaml", kValid)).ros.enabled);
+}
+
+TEST_F(ConfigFiles, TheRosSectionTakesTopicsFramesAndRates) {
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", kRosConfig + R"(ros:
+  master_uri: http://10.0.0.2:11311
+  node_name: staad_test
+  frames: {map: world, base: base_link}
+  base: {cmd_vel: /omni_base_controller/cmd_vel, odom: /omni_base_controller/wheel_odom, queue_size: 2}
+  localization: {source: tf, tf_hz: 20}
+  goals: {action: "", simple_goal: /goal}
+  map: {topic: /static_map, wait_s: 5, occupied_thresh: 0.7, free_thresh: 0.2, simplify_m: 0}
+  markers: {rate_hz: 0}
+)"));
+  const ros::TransportConfig& t = c.ros.transport;
+  EXPECT_EQ(t.master_uri, "http://10.0.0.2:11311");
+  EXPECT_EQ(t.node_name, "staad_test");
+  EXPECT_EQ(t.map_frame, "world");
+  EXPECT_EQ(t.base_frame, "base_link");
+  EXPECT_EQ(t.cmd_vel_topic, "/omni_base_controller/cmd_vel");
+  EXPECT_EQ(t.odom_topic, "/omni_base_controller/wheel_odom");
+  EXPECT_EQ(t.queue_size, 2);
+  EXPECT_EQ(t.localization, ros::LocalizationSource::kTf);
+  EXPECT_DOUBLE_EQ(t.tf_localization_hz, 20.0);
+  EXPECT_TRUE(t.action_name.empty()) << "\"\" turns the action server off";
+  EXPECT_EQ(t.simple_goal_topic, "/goal");
+  EXPECT_EQ(t.map_topic, "/static_map");
+  EXPECT_DOUBLE_EQ(c.ros.map_wait_s, 5.0);
+  EXPECT_DOUBLE_EQ(c.ros.occupied_thresh, 0.7);
+  EXPECT_DOUBLE_EQ(c.ros.simplify_m, 0.0);
+  EXPECT_DOUBLE_EQ(c.ros.markers_hz, 0.0);
+}
+
+TEST_F(ConfigFiles, BadRosValuesAreNamedWithTheirKeyAndLine) {
+  struct Case {
+    std::string section;
+    std::vector<std::string> expected;
+  };
+  const std::vector<Case> cases = {
+      {"{base: {odom: \"odom topic\"}}", {"ros.base.odom", "ROS name", "'odom topic'"}},
+      {"{base: {cmd_vel: \"\"}}", {"ros.base.cmd_vel", "ROS name"}},
+      {"{base: {queue_size: 0}}", {"ros.base.queue_size", "0"}},
+      {"{master_uri: 10.0.0.2:11311}", {"ros.master_uri", "http://host:port"}},
+      {"{node_name: a/b}", {"ros.node_name", "no '/'"}},
+      {"{localization: {source: amcl}}", {"ros.localization.source", "pose (geometry_msgs/PoseStamped", "tf (tf from frames.map", "'amcl'"}},
+      {"{map: {occupied_thresh: 0.1, free_thresh: 0.3}}", {"ros.map", "free_thresh (0.3) must be below occupied_thresh (0.1)"}},
+      {"{map: {wait_s: -1}}", {"ros.map.wait_s"}},
+      {"{markers: {rate_hz: -2}}", {"ros.markers.rate_hz"}},
+      {"{topics: {}}", {"ros.topics", "unknown key"}},
+  };
+  for (const Case& c : cases) {
+    const std::string text = kRosConfig + "ros: " + c.section + "\n";
+    const std::string error = loadError(text);
+    SCOPED_TRACE(c.section + "  ->  " + error);
+    for (const std::string& e : c.expected) EXPECT_THAT(error, HasSubstr(e));
+    EXPECT_THAT(error, HasSubstr("staad.yaml:" + std::to_string(lineOf(text, "ros: ")) + ": "));
+  }
+}
+
+TEST_F(ConfigFiles, AMapFromRosCannotAnchorTheSimulatedWorld) {
+  const std::string error = loadError(edited("map: maps/office.yaml", "map: ros"));
+  EXPECT_THAT(error, HasSubstr("map: ros needs a real base and real obstacles"));
+  EXPECT_THAT(error, HasSubstr("staad.yaml:3: "));
+}
+
+TEST(ShippedConfig, TheHsrRosConfigLoads) {
+  const DaemonConfig c = loadDaemonConfig(test::sourceDir() / "config/staad-hsr-ros.yaml");
+  EXPECT_EQ(c.hal, HalBackend::kRos);
+  EXPECT_TRUE(c.map_from_ros);
+  EXPECT_EQ(c.obstacles, ObstacleSource::kNone);
+  EXPECT_EQ(c.ros.transport.cmd_vel_topic, "/hsrb/command_velocity");
+  EXPECT_EQ(c.ros.transport.localization_topic, "/global_pose");
 }
 
 TEST_F(SocketCanConfig, HalFromTheCommandLineIsAppliedBeforeItsSectionIsRead) {
