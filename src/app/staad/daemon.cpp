@@ -387,6 +387,13 @@ DaemonConfig loadConfig(const DaemonOptions& options) {
   if (options.socket_path) config.socket_path = *options.socket_path;
   if (options.telemetry_path) config.telemetry_path = *options.telemetry_path;
   if (options.svg_path) config.svg_path = *options.svg_path;
+  for (const std::string& r : options.ros_remappings) {
+    const std::size_t at = r.find(":=");
+    if (at == 0 || at + 2 >= r.size()) {
+      throw ConfigError("command line: a ROS remapping is NAME:=VALUE, got '" + r + "'");
+    }
+    config.ros.transport.remappings.emplace_back(r.substr(0, at), r.substr(at + 2));
+  }
   return config;
 }
 

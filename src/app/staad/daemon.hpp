@@ -24,6 +24,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace staa::staad {
 
@@ -47,6 +48,7 @@ struct DaemonOptions {
   std::optional<std::string> socket_path;
   std::optional<std::filesystem::path> telemetry_path;
   std::optional<std::filesystem::path> svg_path;  // overrides telemetry.svg
+  std::vector<std::string> ros_remappings;  // NAME:=VALUE from the command line (roslaunch)
 };
 
 // config/staad.yaml relative to the current directory if it exists, else

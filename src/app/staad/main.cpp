@@ -1,7 +1,10 @@
 // staad: the STAA* motion controller daemon (docs/staad.md).
 //
-//   staad [--config FILE] [--hal sim|socketcan] [--socket PATH] [--telemetry FILE] [--svg FILE]
+//   staad [--config FILE] [--hal sim|socketcan|ros] [--socket PATH] [--telemetry FILE] [--svg FILE]
+//         [NAME:=VALUE ...]
 //
+// NAME:=VALUE arguments are ROS remappings (roslaunch passes __name:=, __log:= and the
+// launch file's remaps): they go to the ROS link, not to the option parser.
 // Exit status: 0 stopped by SIGTERM/SIGINT, 1 run-time failure (socket busy, a thread could
 // not start), 2 bad config, arguments or environment (the message names the key and value),
 // 3 the hardware cannot be opened (no such CAN interface, no socket at the unix: path).
@@ -27,12 +30,18 @@ int main(int argc, char** argv) {
     app.add_option("--config", config, "daemon config (default: config/staad.yaml, then /etc/staad/staad.yaml)");
     std::vector<std::string> hal_names;  // the config's names, parsed into the enum below
     for (const auto& choice : kHalBackends) hal_names.emplace_back(choice.name);
-    app.add_option("--hal", hal, "hardware: sim (the simulator) or socketcan")->check(CLI::IsMember(hal_names));
+    app.add_option("--hal", hal, "hardware: sim (the simulator), socketcan or ros")->check(CLI::IsMember(hal_names));
     app.add_option("--socket", socket, "control socket path (overrides socket.path)");
     app.add_option("--telemetry", telemetry, "telemetry CSV file (overrides telemetry.path)");
     app.add_option("--svg", svg, "a picture of the run written when staad stops (overrides telemetry.svg)");
+    std::vector<std::string> args;
+    std::vector<std::string> remappings;
+    for (int i = argc - 1; i >= 1; --i) {  // CLI11 takes them in reverse
+      const std::string a = argv[i];
+      (a.find(":=") != std::string::npos && a.rfind("-", 0) != 0 ? remappings : args).push_back(a);
+    }
     try {
-      app.parse(argc, argv);
+      app.parse(args);
     } catch (const CLI::ParseError& e) {
       const int code = app.exit(e);
       return code == 0 ? kExitOk : kExitBadConfig;
@@ -44,6 +53,7 @@ int main(int argc, char** argv) {
     if (!socket.empty()) options.socket_path = socket;
     if (!telemetry.empty()) options.telemetry_path = telemetry;
     if (!svg.empty()) options.svg_path = svg;
+    options.ros_remappings.assign(remappings.rbegin(), remappings.rend());
     staa::rt::MonotonicClock clock;
     return runDaemon(options, clock, std::cerr);
   } catch (const std::exception& e) {

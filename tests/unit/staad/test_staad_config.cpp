@@ -647,7 +647,8 @@ class SystemdUnit : public ConfigFiles {
  protected:
   // The shipped unit with ExecStart pointing at a binary that exists here (verify checks it),
   // and `edit` applied, in a folder of its own (with the real-time drop-in when asked).
-  CommandRun verify(const std::string& name, const std::string& from = "", const std::string& to = "", bool dropin = false) {
+  CommandRun verify(const std::string& name, const std::string& from = "", const std::string& to = "",
+                    const std::string& dropin = "") {
     const fs::path unit_dir = dir_ / name;
     std::string unit = readFile(test::sourceDir() / "systemd/staad.service");
     const auto exec = unit.find("ExecStart=/usr/bin/staad");
@@ -659,9 +660,12 @@ class SystemdUnit : public ConfigFiles {
       if (at != std::string::npos) unit.replace(at, from.size(), to);
     }
     write(name + "/staad.service", unit);
-    if (dropin) {
-      write(name + "/staad.service.d/realtime.conf",
-            readFile(test::sourceDir() / "systemd/staad.service.d/realtime.conf.example"));
+    if (!dropin.empty()) {
+      std::string text = readFile(test::sourceDir() / "systemd/staad.service.d" / dropin);
+      for (auto at = text.find("ExecStart=/usr/bin/staad"); at != std::string::npos; at = text.find("ExecStart=/usr/bin/staad")) {
+        text.replace(at, std::string("ExecStart=/usr/bin/staad").size(), "ExecStart=/bin/true");
+      }
+      write(name + "/staad.service.d/" + fs::path(dropin).stem().string() + ".conf", text);
     }
     return runCommand({"systemd-analyze", "verify", (unit_dir / "staad.service").string()}, dir_ / (name + ".out"));
   }
@@ -679,9 +683,13 @@ TEST_F(SystemdUnit, VerifyAcceptsTheUnitAndRejectsBrokenCopies) {
   // Warnings ("ignoring") do not change verify's exit code: none may name our unit.
   EXPECT_THAT(ours.output, ::testing::Not(HasSubstr("staad.service"))) << ours.output;
 
-  const CommandRun with_dropin = verify("dropin", "", "", true);
+  const CommandRun with_dropin = verify("dropin", "", "", "realtime.conf.example");
   EXPECT_EQ(with_dropin.exit_code, 0) << with_dropin.output;
   EXPECT_THAT(with_dropin.output, ::testing::Not(HasSubstr("staad.service"))) << with_dropin.output;
+  const CommandRun with_ros = verify("ros", "", "", "ros.conf");
+  EXPECT_EQ(with_ros.exit_code, 0) << with_ros.output;
+  EXPECT_THAT(with_ros.output, ::testing::Not(HasSubstr("staad.service"))) << with_ros.output;
+  EXPECT_THAT(with_ros.output, ::testing::Not(HasSubstr("ros.conf"))) << with_ros.output;
 
   // A missing executable fails verify outright ...
   const CommandRun missing = verify("missing", "ExecStart=/bin/true", "ExecStart=/nonexistent/staad");
@@ -692,6 +700,18 @@ TEST_F(SystemdUnit, VerifyAcceptsTheUnitAndRejectsBrokenCopies) {
   const CommandRun bogus = verify("bogus", "Type=notify", "Type=bogus");
   EXPECT_TRUE(bogus.exit_code != 0 || bogus.output.find("staad.service:") != std::string::npos) << bogus.output;
   EXPECT_THAT(bogus.output, HasSubstr("bogus"));
+}
+
+// The ROS drop-in widens the sandbox by IP and TCP binding only.
+TEST(SystemdUnitText, TheRosDropInAddsTheIpFamiliesAndTcpBindsAndNothingElse) {
+  const std::string ros = readFile(test::sourceDir() / "systemd/staad.service.d/ros.conf");
+  for (const char* line : {"RestrictAddressFamilies=AF_UNIX AF_CAN AF_NETLINK AF_INET AF_INET6", "SocketBindAllow=tcp",
+                           "SocketBindDeny=any", "ExecStart=\nExecStart=/usr/bin/staad --config /etc/staad/staad-hsr-ros.yaml"}) {
+    EXPECT_THAT(ros, HasSubstr(line));
+  }
+  for (const char* widened : {"NoNewPrivileges", "ProtectSystem", "DevicePolicy", "AF_PACKET", "User="}) {
+    EXPECT_THAT(ros, ::testing::Not(HasSubstr(widened))) << "the ROS drop-in must not touch " << widened;
+  }
 }
 
 TEST(SystemdUnitText, HasTheSettingsTheDaemonReliesOn) {

@@ -124,6 +124,7 @@ Ros1Transport::Ros1Transport(const TransportConfig& config, const TransportSinks
     : config_(config), sinks_(sinks) {
   ::ros::M_string remappings;
   if (!config.master_uri.empty()) remappings["__master"] = config.master_uri;
+  for (const auto& r : config.remappings) remappings[r.first] = r.second;
   // staad owns SIGINT/SIGTERM (signalfd); roscpp must not install its handler.
   ::ros::init(remappings, config.node_name, ::ros::init_options::NoSigintHandler);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(config.master_wait_s);

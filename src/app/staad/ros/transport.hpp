@@ -37,6 +37,9 @@ enum class LocalizationSource { kNone, kPoseStamped, kPoseWithCovarianceStamped,
 struct TransportConfig {
   std::string master_uri;  // empty: the environment's ROS_MASTER_URI
   std::string node_name = "staad";
+  // NAME:=VALUE from the command line (roslaunch's __name, __log, __ns and remaps), as
+  // ros::init takes them; __master here overrides master_uri.
+  std::vector<std::pair<std::string, std::string>> remappings;
   double master_wait_s = 10.0;  // how long start() waits for the master
   std::string map_frame = "map";
   std::string base_frame = "base_footprint";
