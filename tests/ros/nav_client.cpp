@@ -1,0 +1,273 @@
+// staa-test-nav-client: what a ROS navigation user sends staad and reads back, for the tests
+// of the ROS link (C++17: ROS 1 headers). One JSON line per result on stdout.
+//
+//   move-base X Y THETA [--frame map] [--timeout 60] [--cancel-after S] [--action move_base]
+//       a move_base action goal; {"state":"SUCCEEDED"|"ABORTED"|"PREEMPTED"|...,"text":...,
+//       "feedbacks":N,"last_feedback":[x,y,theta]} when it ends (exit 3 if it does not)
+//   simple-goal X Y THETA [--frame map] [--topic /move_base_simple/goal]
+//   pose X Y THETA [--topic /global_pose] [--frame map] [--covariance]
+//       one localization fix, stamped now
+//   bad-odom KIND COUNT [--topic /hsrb/odom]   KIND: nan | inf | back (stamps 10 s in the past)
+//   markers [--topic /staad/markers] [--timeout 10] [--with NS]
+//       the first MarkerArray (that has namespace NS): {"namespaces":{"ns":points,...}}
+//   diagnostics [--topic /diagnostics] [--timeout 10] [--until KEY=VALUE]
+//       the first DiagnosticArray of staad (whose KEY is VALUE): {"level":L,"message":...,"values":{...}}
+//
+// Exit codes: 0 done, 2 bad arguments, 3 timed out.
+
+#include <actionlib/client/simple_action_client.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <move_base_msgs/MoveBaseAction.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+struct Args {
+  std::vector<std::string> positional;
+  std::map<std::string, std::string> options;
+  std::string option(const std::string& name, const std::string& fallback) const {
+    const auto it = options.find(name);
+    return it == options.end() ? fallback : it->second;
+  }
+  double number(const std::string& name, double fallback) const {
+    const auto it = options.find(name);
+    return it == options.end() ? fallback : std::strtod(it->second.c_str(), nullptr);
+  }
+};
+
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    out += c;
+  }
+  return out + "\"";
+}
+
+bool pose3(const Args& a, double& x, double& y, double& theta) {
+  if (a.positional.size() < 3) return false;
+  char* end = nullptr;
+  x = std::strtod(a.positional[0].c_str(), &end);
+  y = std::strtod(a.positional[1].c_str(), &end);
+  theta = std::strtod(a.positional[2].c_str(), &end);
+  return true;
+}
+
+geometry_msgs::PoseStamped stamped(double x, double y, double theta, const std::string& frame) {
+  geometry_msgs::PoseStamped p;
+  p.header.stamp = ros::Time::now();
+  p.header.frame_id = frame;
+  p.pose.position.x = x;
+  p.pose.position.y = y;
+  p.pose.orientation.z = std::sin(theta / 2.0);
+  p.pose.orientation.w = std::cos(theta / 2.0);
+  return p;
+}
+
+double yawOf(const geometry_msgs::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+template <typename Publisher>
+bool waitSubscriber(const Publisher& pub, double seconds) {
+  const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (pub.getNumSubscribers() == 0) {
+    if (!ros::ok() || ros::WallTime::now() > give_up) return false;
+    ros::WallDuration(0.01).sleep();
+  }
+  return true;
+}
+
+int moveBase(const Args& a) {
+  double x, y, theta;
+  if (!pose3(a, x, y, theta)) return 2;
+  actionlib::SimpleActionClient<move_base_msgs::MoveBaseAction> client(a.option("--action", "move_base"), true);
+  if (!client.waitForServer(ros::Duration(10.0))) {
+    std::fprintf(stderr, "staa-test-nav-client: no action server within 10 s\n");
+    return 3;
+  }
+  move_base_msgs::MoveBaseGoal goal;
+  goal.target_pose = stamped(x, y, theta, a.option("--frame", "map"));
+  int feedbacks = 0;
+  double fx = 0, fy = 0, ft = 0;
+  client.sendGoal(goal, {}, {}, [&](const move_base_msgs::MoveBaseFeedbackConstPtr& f) {
+    ++feedbacks;
+    fx = f->base_position.pose.position.x;
+    fy = f->base_position.pose.position.y;
+    ft = yawOf(f->base_position.pose.orientation);
+  });
+  const double cancel_after = a.number("--cancel-after", -1.0);
+  const double timeout = a.number("--timeout", 60.0);
+  if (cancel_after >= 0.0) {
+    client.waitForResult(ros::Duration(cancel_after));
+    if (!client.getState().isDone()) client.cancelGoal();
+  }
+  if (!client.waitForResult(ros::Duration(timeout))) {
+    std::fprintf(stderr, "staa-test-nav-client: no result within %g s\n", timeout);
+    return 3;
+  }
+  std::printf("{\"state\":%s,\"text\":%s,\"feedbacks\":%d,\"last_feedback\":[%.6f,%.6f,%.6f]}\n",
+              quoted(client.getState().toString()).c_str(), quoted(client.getState().getText()).c_str(), feedbacks, fx,
+              fy, ft);
+  return 0;
+}
+
+int simpleGoal(ros::NodeHandle& n, const Args& a) {
+  double x, y, theta;
+  if (!pose3(a, x, y, theta)) return 2;
+  ros::Publisher pub = n.advertise<geometry_msgs::PoseStamped>(a.option("--topic", "/move_base_simple/goal"), 1);
+  if (!waitSubscriber(pub, 10.0)) return 3;
+  pub.publish(stamped(x, y, theta, a.option("--frame", "map")));
+  ros::WallDuration(0.3).sleep();
+  std::printf("{\"sent\":true}\n");
+  return 0;
+}
+
+int pose(ros::NodeHandle& n, const Args& a) {
+  double x, y, theta;
+  if (!pose3(a, x, y, theta)) return 2;
+  const std::string topic = a.option("--topic", "/global_pose");
+  const std::string frame = a.option("--frame", "map");
+  if (a.options.count("--covariance") != 0) {
+    ros::Publisher pub = n.advertise<geometry_msgs::PoseWithCovarianceStamped>(topic, 1);
+    if (!waitSubscriber(pub, 10.0)) return 3;
+    geometry_msgs::PoseWithCovarianceStamped m;
+    const geometry_msgs::PoseStamped p = stamped(x, y, theta, frame);
+    m.header = p.header;
+    m.pose.pose = p.pose;
+    pub.publish(m);
+  } else {
+    ros::Publisher pub = n.advertise<geometry_msgs::PoseStamped>(topic, 1);
+    if (!waitSubscriber(pub, 10.0)) return 3;
+    pub.publish(stamped(x, y, theta, frame));
+  }
+  ros::WallDuration(0.3).sleep();
+  std::printf("{\"sent\":true}\n");
+  return 0;
+}
+
+int badOdom(ros::NodeHandle& n, const Args& a) {
+  if (a.positional.size() != 2) return 2;
+  const std::string kind = a.positional[0];
+  const int count = std::atoi(a.positional[1].c_str());
+  ros::Publisher pub = n.advertise<nav_msgs::Odometry>(a.option("--topic", "/hsrb/odom"), 10);
+  if (!waitSubscriber(pub, 10.0)) return 3;
+  for (int i = 0; i < count; ++i) {
+    nav_msgs::Odometry o;
+    o.header.stamp = ros::Time::now();
+    o.header.frame_id = "odom";
+    o.pose.pose.orientation.w = 1.0;
+    if (kind == "nan") o.pose.pose.position.x = std::numeric_limits<double>::quiet_NaN();
+    else if (kind == "inf") o.twist.twist.linear.x = std::numeric_limits<double>::infinity();
+    else if (kind == "back") o.header.stamp = ros::Time::now() - ros::Duration(10.0);
+    else return 2;
+    pub.publish(o);
+    ros::WallDuration(0.02).sleep();
+  }
+  ros::WallDuration(0.2).sleep();
+  std::printf("{\"sent\":%d}\n", count);
+  return 0;
+}
+
+int markers(ros::NodeHandle& n, const Args& a) {
+  const std::string with = a.option("--with", "");
+  bool done = false;
+  ros::Subscriber sub = n.subscribe<visualization_msgs::MarkerArray>(
+      a.option("--topic", "/staad/markers"), 4, [&](const visualization_msgs::MarkerArray::ConstPtr& m) {
+        if (done) return;
+        std::map<std::string, std::size_t> points;
+        for (const auto& marker : m->markers) {
+          if (marker.action != visualization_msgs::Marker::ADD) continue;
+          points[marker.ns] += marker.points.empty() ? 1 : marker.points.size();
+          if (marker.header.frame_id.empty()) points["<no frame>"] += 1;
+        }
+        if (!with.empty() && points.count(with) == 0) return;
+        std::string out = "{\"namespaces\":{";
+        bool first = true;
+        for (const auto& p : points) {
+          out += (first ? "" : ",") + quoted(p.first) + ":" + std::to_string(p.second);
+          first = false;
+        }
+        std::printf("%s},\"markers\":%zu}\n", out.c_str(), m->markers.size());
+        done = true;
+      });
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(a.number("--timeout", 10.0));
+  while (ros::ok() && !done && ros::WallTime::now() < end) ros::spinOnce(), ros::WallDuration(0.005).sleep();
+  return done ? 0 : 3;
+}
+
+int diagnostics(ros::NodeHandle& n, const Args& a) {
+  const std::string until = a.option("--until", "");
+  const std::size_t eq = until.find('=');
+  bool done = false;
+  ros::Subscriber sub = n.subscribe<diagnostic_msgs::DiagnosticArray>(
+      a.option("--topic", "/diagnostics"), 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
+        for (const auto& s : m->status) {
+          if (done || s.name.find("staad") == std::string::npos) continue;
+          bool match = until.empty();
+          std::string values;
+          for (const auto& kv : s.values) {
+            values += (values.empty() ? "" : ",") + quoted(kv.key) + ":" + quoted(kv.value);
+            if (eq != std::string::npos && kv.key == until.substr(0, eq) && kv.value == until.substr(eq + 1)) match = true;
+          }
+          if (!match) continue;
+          std::printf("{\"name\":%s,\"level\":%d,\"message\":%s,\"values\":{%s}}\n", quoted(s.name).c_str(), s.level,
+                      quoted(s.message).c_str(), values.c_str());
+          done = true;
+        }
+      });
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(a.number("--timeout", 10.0));
+  while (ros::ok() && !done && ros::WallTime::now() < end) ros::spinOnce(), ros::WallDuration(0.005).sleep();
+  return done ? 0 : 3;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "staa_test_nav_client", ros::init_options::AnonymousName);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: staa-test-nav-client move-base|simple-goal|pose|bad-odom|markers|diagnostics ...\n");
+    return 2;
+  }
+  Args args;
+  for (int i = 2; i < argc; ++i) {
+    const std::string s = argv[i];
+    const bool flag = s == "--covariance";
+    if (s.rfind("--", 0) == 0 && !flag && i + 1 < argc) {
+      args.options[s] = argv[++i];
+    } else if (flag) {
+      args.options[s] = "1";
+    } else {
+      args.positional.push_back(s);
+    }
+  }
+  ros::NodeHandle n;
+  // The action client and the callbacks need spinning while moveBase waits.
+  ros::AsyncSpinner spinner(1);
+  const std::string c = argv[1];
+  if (c == "move-base") {
+    spinner.start();
+    return moveBase(args);
+  }
+  if (c == "simple-goal") return simpleGoal(n, args);
+  if (c == "pose") return pose(n, args);
+  if (c == "bad-odom") return badOdom(n, args);
+  if (c == "markers") return markers(n, args);
+  if (c == "diagnostics") return diagnostics(n, args);
+  std::fprintf(stderr, "staa-test-nav-client: unknown command '%s'\n", c.c_str());
+  return 2;
+}
