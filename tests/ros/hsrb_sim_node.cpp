@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <csignal>
+#include <cstdio>
 #include <cmath>
 #include <string>
 
@@ -102,8 +103,9 @@ class SimBase {
       publish(now);
       rate.sleep();
     }
-    ROS_INFO("commands received: %lu (%lu with a sideways speed, %lu not finite, ignored)", commands_, sideways_,
-             rejected_);
+    // After the shutdown rosconsole prints nothing: plain stdout.
+    std::printf("commands received: %lu (%lu with a sideways speed, %lu not finite, ignored)\n", commands_, sideways_,
+                rejected_);
   }
 
  private:
