@@ -4,7 +4,7 @@
 # compiles it as C++17: the ROS 1 message headers do not compile as C++20 (they use
 # std::allocator<void>::rebind). A translation unit that includes a ROS header must
 # therefore not include the project's C++20 headers; plain C++ helpers may stay C++20.
-# Included from wherever it is needed; the first inclusion decides.
+# Included once, by the top-level CMakeLists.txt (its variables are seen by every folder).
 include_guard(GLOBAL)
 
 find_package(PkgConfig REQUIRED)

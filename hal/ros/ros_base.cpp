@@ -34,6 +34,22 @@ rt::Nanos monotonicStamp(std::int64_t arrival, std::int64_t age) {
 RosBase::RosBase(RosBaseOptions options) : options_(options) { status_.enabled = true; }
 
 void RosBase::offerOdometry(const OdometrySample& sample) {
+  BaseFault fault = BaseFault::kNone;
+  if (!finite(sample)) {
+    fault = BaseFault::kOdometryInvalid;
+  } else if (offered_any_ && sample.stamp_ns <= last_offered_stamp_) {
+    // The same stamp again is a repeat (dropped); an older one is a clock gone back.
+    if (sample.stamp_ns < last_offered_stamp_) fault = BaseFault::kOdometryStampBack;
+    bad_offered_.fetch_add(1, std::memory_order_relaxed);
+    if (fault == BaseFault::kNone) return;
+  }
+  if (fault != BaseFault::kNone) {
+    if (fault == BaseFault::kOdometryInvalid) bad_offered_.fetch_add(1, std::memory_order_relaxed);
+    pending_fault_.store(static_cast<std::uint8_t>(fault), std::memory_order_release);
+    return;
+  }
+  offered_any_ = true;
+  last_offered_stamp_ = sample.stamp_ns;
   odometry_in_.writeBuffer() = sample;
   odometry_in_.publish();
 }
@@ -44,22 +60,20 @@ void RosBase::offerPose(const PoseSample& sample) {
 }
 
 void RosBase::takeOdometry() {
+  status_.bad_frames = bad_offered_.load(std::memory_order_relaxed);
+  const auto fault = static_cast<BaseFault>(pending_fault_.exchange(0, std::memory_order_acq_rel));
+  if (fault != BaseFault::kNone) {
+    status_.fault = fault;
+    fault_fresh_ = true;
+  }
   if (!odometry_in_.update()) return;
   const OdometrySample& s = odometry_in_.readBuffer();
-  if (!finite(s)) {
-    ++status_.bad_frames;
-    status_.fault = BaseFault::kOdometryInvalid;
-    return;
+  if (fault_fresh_) {
+    fault_fresh_ = false;  // this sample may predate the bad one: the next clears the fault
+  } else {
+    status_.fault = BaseFault::kNone;
   }
-  if (have_odometry_ && s.stamp_ns <= last_ros_stamp_) {
-    ++status_.bad_frames;
-    // The same stamp again is a repeat (dropped); an older one is a clock gone back.
-    if (s.stamp_ns < last_ros_stamp_) status_.fault = BaseFault::kOdometryStampBack;
-    return;
-  }
-  status_.fault = BaseFault::kNone;
   have_odometry_ = true;
-  last_ros_stamp_ = s.stamp_ns;
   odom_pose_ = Pose2{s.x, s.y, wrapAngle(s.yaw)};
   history_[history_next_] = Stamped{s.stamp_ns, odom_pose_};
   history_next_ = (history_next_ + 1) % kHistory;
@@ -75,7 +89,8 @@ void RosBase::takeOdometry() {
 bool RosBase::odometryAt(std::int64_t ros_stamp, Pose2& out) const {
   if (history_count_ == 0) return false;
   const std::size_t newest = (history_next_ + kHistory - 1) % kHistory;
-  if (ros_stamp >= history_[newest].ros_stamp) {
+  // Stamp 0 is ROS's "the latest" (tf's Time(0), an unstamped message).
+  if (ros_stamp == 0 || ros_stamp >= history_[newest].ros_stamp) {
     out = history_[newest].pose;
     return true;
   }

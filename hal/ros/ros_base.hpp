@@ -6,14 +6,17 @@
 // Nothing here includes ROS: a ROS 2 transport uses the same backend.
 //
 // Faults, each a named BaseFault that brakes (the control thread holds the robot):
-//   kOdometryInvalid   the newest odometry had a NaN or infinite value (dropped, counted)
-//   kOdometryStampBack the newest odometry's stamp went back (dropped, counted)
-// Each clears with the next good odometry. No odometry at all is the control thread's stale
-// odometry fault (Odometry::stamp does not advance).
+//   kOdometryInvalid   an odometry message had a NaN or infinite value (dropped, counted)
+//   kOdometryStampBack an odometry message's stamp went back (dropped, counted)
+// Each clears with good odometry after it (at the next read() but one). Every message is
+// judged as it is offered, so none slips by between two reads; a repeated stamp is dropped
+// and counted without a fault. No odometry at all is the control thread's stale odometry
+// fault (Odometry::stamp does not advance).
 //
 // The pose staad plans in is the map frame: odometry (the odometry frame) corrected by the
 // latest localization fix, T_map_odom = fix * inverse(odometry at the fix's stamp); the
-// odometry at that stamp is interpolated from the last kHistory samples. A fix is applied by
+// odometry at that stamp is interpolated from the last kHistory samples (stamp 0, ROS's "the
+// latest", takes the newest). A fix is applied by
 // read(), between two control cycles; its jump (how far the corrected pose moved) is in
 // status(). setPose() (staactl pose) re-anchors the same correction.
 //
@@ -72,6 +75,10 @@ class RosBase final : public Base, public BaseSink {
   RosBaseOptions options_;
   // transport -> base thread
   rt::TripleBuffer<OdometrySample> odometry_in_;
+  std::int64_t last_offered_stamp_ = -1;  // the transport thread's
+  bool offered_any_ = false;
+  std::atomic<std::uint64_t> bad_offered_{0};
+  std::atomic<std::uint8_t> pending_fault_{0};  // a BaseFault seen by offerOdometry, not yet read
   rt::TripleBuffer<PoseSample> fixes_in_;
   // base thread -> publisher thread
   rt::TripleBuffer<TwistSample> twist_out_;
@@ -83,8 +90,8 @@ class RosBase final : public Base, public BaseSink {
   Odometry odometry_;
   BaseStatus status_;
   Pose2 odom_pose_;          // the newest good odometry, in the odometry frame
-  std::int64_t last_ros_stamp_ = -1;
   bool have_odometry_ = false;
+  bool fault_fresh_ = false;  // the fault came in this read: good odometry of the same read does not clear it
   bool have_pending_fix_ = false;
   PoseSample pending_fix_;
   Pose2 map_from_odom_;      // T_map_odom

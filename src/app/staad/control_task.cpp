@@ -61,6 +61,22 @@ const char* faultMessage(FaultKind f) {
   return "fault: ?";
 }
 
+// A base fault by name (the log keeps the literal's pointer).
+const char* baseFaultMessage(hal::BaseFault f) {
+  switch (f) {
+    case hal::BaseFault::kNone: break;
+    case hal::BaseFault::kEmergencyStop: return "fault: the base reports a fault, braking: emergency stop (code)";
+    case hal::BaseFault::kHeartbeatLost: return "fault: the base reports a fault, braking: heartbeat lost (code)";
+    case hal::BaseFault::kBusOff: return "fault: the base reports a fault, braking: bus off (code)";
+    case hal::BaseFault::kWriteFailed: return "fault: the base reports a fault, braking: write failed (code)";
+    case hal::BaseFault::kDriverFault: return "fault: the base reports a fault, braking: driver fault (code)";
+    case hal::BaseFault::kOdometryInvalid: return "fault: the base reports a fault, braking: odometry invalid (code)";
+    case hal::BaseFault::kOdometryStampBack:
+      return "fault: the base reports a fault, braking: odometry stamp went back (code)";
+  }
+  return "fault: the base reports a fault, braking (code)";
+}
+
 double ageSeconds(rt::Nanos now, rt::Nanos stamp) { return stamp < 0 ? -1.0 : static_cast<double>(now - stamp) * 1e-9; }
 
 }  // namespace
@@ -207,8 +223,7 @@ void ControlTask::setState(rt::Nanos now, DaemonState state, FaultKind fault) {
             static_cast<double>(obstacles_timeout_) * 1e-9, 0.0, 2);
         break;
       case FaultKind::kBase:
-        log(now, level, faultMessage(fault), static_cast<double>(base_.status.fault),
-            static_cast<double>(base_.status.fault_code), 0.0, 2);
+        log(now, level, baseFaultMessage(base_.status.fault), static_cast<double>(base_.status.fault_code), 0.0, 0.0, 1);
         break;
       case FaultKind::kNone: log(now, level, faultMessage(fault)); break;
     }

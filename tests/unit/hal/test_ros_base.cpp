@@ -91,8 +91,28 @@ TEST(RosBase, ANonFiniteValueIsDroppedCountedAndAFaultUntilTheNextGoodSample) {
   EXPECT_EQ(base.odometry().stamp, rt::kNanosPerSecond + 1000 * kMs) << "a dropped sample does not freshen the odometry";
   base.offerOdometry(odom(1040, 1.1, 2.0, 0.0));
   base.read(0);
-  EXPECT_EQ(base.status().fault, BaseFault::kNone);
   EXPECT_EQ(base.odometry().pose.x, 1.1);
+  base.offerOdometry(odom(1060, 1.2, 2.0, 0.0));
+  base.read(0);
+  EXPECT_EQ(base.status().fault, BaseFault::kNone) << "good odometry after the bad one clears it";
+}
+
+TEST(RosBase, EveryBadMessageCountsAndFaultsEvenWhenAGoodOneFollowsBeforeTheRead) {
+  RosBase base;
+  base.offerOdometry(odom(1000, 1.0, 0.0, 0.0));
+  base.read(0);
+  // Between two base-thread reads: a NaN, then good odometry from the base.
+  base.offerOdometry(odom(1010, std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0));
+  base.offerOdometry(odom(1020, 1.1, 0.0, 0.0));
+  base.read(0);
+  EXPECT_EQ(base.status().bad_frames, 1u);
+  EXPECT_EQ(base.status().fault, BaseFault::kOdometryInvalid) << "the bad message is not hidden by the good one";
+  EXPECT_EQ(base.odometry().pose.x, 1.1);
+  base.read(0);
+  EXPECT_EQ(base.status().fault, BaseFault::kOdometryInvalid) << "no newer odometry yet";
+  base.offerOdometry(odom(1040, 1.2, 0.0, 0.0));
+  base.read(0);
+  EXPECT_EQ(base.status().fault, BaseFault::kNone);
 }
 
 TEST(RosBase, AStampGoingBackIsAFaultAndARepeatedStampIsOnlyDropped) {
@@ -110,7 +130,10 @@ TEST(RosBase, AStampGoingBackIsAFaultAndARepeatedStampIsOnlyDropped) {
   EXPECT_EQ(base.odometry().pose.x, 1.0);
   base.offerOdometry(odom(1020, 1.2, 0.0, 0.0));
   base.read(0);
+  base.offerOdometry(odom(1040, 1.3, 0.0, 0.0));
+  base.read(0);
   EXPECT_EQ(base.status().fault, BaseFault::kNone);
+  EXPECT_EQ(base.status().bad_frames, 2u);
 }
 
 TEST(RosBase, ALocalizationFixCorrectsTheOdometryAtTheFixStampAndReportsTheJump) {
