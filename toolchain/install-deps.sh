@@ -24,6 +24,12 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev
   librsvg2-bin   # rsvg-convert: SVG -> PNG for the README picture and experiment plots
   libopenni2-dev # OpenNI2: the HSR's head Xtion (hal/openni2, built only when found)
+  # ROS 1 (Noetic-era, Debian 12): staad's ROS link (src/app/staad/ros, built only when found)
+  # and its tests, which start a master, roslaunch and rosbag of their own.
+  libroscpp-dev ros-core-dev python3-rostopic librosbag-dev python3-rosbag
+  libtf2-ros-dev libtf2-geometry-msgs-dev libactionlib-dev
+  ros-move-base-msgs libmove-base-msgs-dev libnav-msgs-dev libsensor-msgs-dev libgeometry-msgs-dev
+  libvisualization-msgs-dev libdiagnostic-msgs-dev libstd-msgs-dev
 )
 AARCH64_HOST_PACKAGES=(
   g++-aarch64-linux-gnu qemu-user mmdebstrap
