@@ -260,10 +260,12 @@ bool PolygonSet::forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const {
 bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci, double bound) const {
   const Vec2& c = vertices_[ci];
   const Vec2& d = vertices_[nextVertex(ci)];
-  const int oc = orientSign(a, b, c, bound);
-  const int od = orientSign(a, b, d, bound);
   // The edge strictly on one side of the segment's line: no crossing, c not on the segment,
   // and no end of the segment on the edge (the line through it would separate c and d).
+  // Most edges near a segment are; the filter alone says so.
+  if (strictlySameSideFiltered(a, b, c, d, bound)) return false;
+  const int oc = orientSign(a, b, c, bound);
+  const int od = orientSign(a, b, d, bound);
   if (oc * od > 0) return false;
   const int oa = orientSign(c, d, a, bound);
   const int ob = orientSign(c, d, b, bound);
