@@ -70,18 +70,15 @@ int orientSignExact(const Vec2& a, const Vec2& b, const Vec2& c) {
   twoDiff(b.y(), a.y(), dy1, t3);
   twoDiff(c.x(), a.x(), dx2, t4);
   if (t1 == 0.0 && t2 == 0.0 && t3 == 0.0 && t4 == 0.0) {
-    // Exact differences (the usual case for nearby points): dx1 dy2 - dy1 dx2 from two
-    // error-free products.
-    double l = 0.0, le = 0.0, r = 0.0, re = 0.0;
-    twoProduct(dx1, dy2, l, le);
-    twoProduct(dy1, dx2, r, re);
-    std::array<double, 4> e{};
-    std::size_t n = 0;
-    grow(e, n, le);
-    grow(e, n, -re);
-    grow(e, n, l);
-    grow(e, n, -r);
-    return expansionSign(e, n);
+    // Exact differences (the usual case for nearby points): the sign of dx1 dy2 - dy1 dx2.
+    // Rounding is monotonic, so rounded products that differ are ordered as the exact ones;
+    // only equal ones need their rounding errors (whose difference rounds with its sign).
+    const double l = dx1 * dy2, r = dy1 * dx2;
+    if (l != r) return l > r ? 1 : -1;
+    double lp = 0.0, le = 0.0, rp = 0.0, re = 0.0;
+    twoProduct(dx1, dy2, lp, le);
+    twoProduct(dy1, dx2, rp, re);
+    return (le > re) - (le < re);
   }
   // (b - a) x (c - a) expanded into products of the inputs (the a.x * a.y terms cancel).
   const double xs[6] = {b.x(), -b.x(), -a.x(), -b.y(), b.y(), a.y()};

@@ -18,8 +18,9 @@
 namespace staa {
 
 namespace detail {
-// The exact sign by error-free products and sums (out of line: the filter's rare miss).
-int orientSignExact(const Vec2& a, const Vec2& b, const Vec2& c);
+// The exact sign by error-free products and sums (out of line and cold: the filter's rare
+// miss, kept out of the hot loops' code).
+[[gnu::cold]] int orientSignExact(const Vec2& a, const Vec2& b, const Vec2& c);
 // Shewchuk's ccwerrboundA, (3 + 16 eps) eps with eps = 2^-53: bounds the error of the
 // evaluation below from the input coordinates, the rounding of the differences included.
 inline constexpr double kOrientErrorBound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53;
@@ -56,14 +57,39 @@ inline double orientStaticBound(double m) {
   return detail::kOrientErrorBound * 8.0 * p * p;
 }
 
+// The determinant as orientSign evaluates it (rounded; its sign is only trusted beyond a
+// filter's bound). Written once so that tests of one triple share the expression.
+inline double orientDeterminant(const Vec2& a, const Vec2& b, const Vec2& c) {
+  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+}
+
 // orientSign for points within the coordinate bound `static_bound` was made for
 // (orientStaticBound): a determinant beyond it needs no further test, so the hot loops of
 // the path search pay about what the plain orientation costs.
 inline int orientSign(const Vec2& a, const Vec2& b, const Vec2& c, double static_bound) {
-  const double det = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+  const double det = orientDeterminant(a, b, c);
   const int sign = (det > static_bound) - (det < -static_bound);
   if (sign != 0) [[likely]] return sign;
   return orientSign(a, b, c);
+}
+
+// orientSign(a, b, c, bound) * orientSign(a, b, d, bound): the sides of the line ab that c
+// and d lie on (+1 the same, -1 opposite, 0 one on it). The tangency tests ask this of most
+// node pairs; one branch decides it when the static filter decides both signs.
+inline int orientSignProduct(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d, double static_bound) {
+  const double dc = orientDeterminant(a, b, c);
+  const double dd = orientDeterminant(a, b, d);
+  if (std::min(std::abs(dc), std::abs(dd)) > static_bound) [[likely]] return (dc > 0.0) == (dd > 0.0) ? 1 : -1;
+  return orientSign(a, b, c) * orientSign(a, b, d);
+}
+
+// Whether c and d lie strictly on the same side of the line ab, as far as the static filter
+// can tell without the exact stage: true only when both signs are decided and equal.
+inline bool strictlySameSideFiltered(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d,
+                                     double static_bound) {
+  const double dc = orientDeterminant(a, b, c);
+  const double dd = orientDeterminant(a, b, d);
+  return std::min(dc, dd) > static_bound || std::max(dc, dd) < -static_bound;
 }
 
 }  // namespace staa

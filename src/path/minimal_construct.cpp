@@ -19,7 +19,7 @@ constexpr std::uint32_t kNoPolygon = std::numeric_limits<std::uint32_t>::max();
 // Segment from `at` towards `other` touches the polygon at corner `at` (neighbours prev and
 // next) without cutting into it: both neighbours lie on the same side of the line.
 bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next, double bound) {
-  return orientSign(at, other, prev, bound) * orientSign(at, other, next, bound) >= 0;
+  return orientSignProduct(at, other, prev, next, bound) >= 0;
 }
 
 std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
@@ -280,7 +280,9 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
   return b.vertex == kNone || tangentAt(b.pos, a.pos, b.prev, b.next, orient_bound_);
 }
 
-void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
+// Forced inline: repairParent runs it over the whole closed list for every blocked edge,
+// and a call per closed node (registers saved and restored) outweighs the test itself.
+[[gnu::always_inline]] inline void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
   Node& b = nodes_[static_cast<std::size_t>(to)];
   if (b.state == kClosed) return;
   const Node& a = nodes_[static_cast<std::size_t>(from)];

@@ -257,13 +257,22 @@ bool PolygonSet::forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const {
 //  - an end of the segment lies inside the edge and the other end lies left of it.
 // Any first entry into the interior happens at one of these, so no containment test of a
 // sample point is needed.
-bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci, double bound) const {
+//
+// Inline in the edge loops: the edge strictly on one side of the segment's line means no
+// crossing, c not on the segment, and no end of the segment on the edge (the line through
+// it would separate c and d). Most edges near a segment are, and the filter alone says so;
+// the rest of the test is out of line, so this path saves no registers.
+inline bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci, double bound) const {
+  if (strictlySameSideFiltered(a, b, vertices_[ci], vertices_[nextVertex(ci)], bound)) return false;
+  return edgeNearLineBlocks(a, b, ci, bound);
+}
+
+[[gnu::noinline]] bool PolygonSet::edgeNearLineBlocks(const Vec2& a, const Vec2& b, std::size_t ci,
+                                                      double bound) const {
   const Vec2& c = vertices_[ci];
   const Vec2& d = vertices_[nextVertex(ci)];
   const int oc = orientSign(a, b, c, bound);
   const int od = orientSign(a, b, d, bound);
-  // The edge strictly on one side of the segment's line: no crossing, c not on the segment,
-  // and no end of the segment on the edge (the line through it would separate c and d).
   if (oc * od > 0) return false;
   const int oa = orientSign(c, d, a, bound);
   const int ob = orientSign(c, d, b, bound);

@@ -95,6 +95,8 @@ class PolygonSet {
   // Does the segment enter the interior of polygon `k` through the boundary near edge
   // starting at vertex c? (the per-edge part of the exact test, see polygon_set.cpp).
   bool edgeBlocks(const Vec2& a, const Vec2& b, std::size_t c, double bound) const;
+  // edgeBlocks past its common rejection (the edge strictly on one side of the segment's line).
+  bool edgeNearLineBlocks(const Vec2& a, const Vec2& b, std::size_t c, double bound) const;
   // The static orientation bound (geometry/predicates.hpp) for this set's vertices and the
   // query points a and b.
   double orientBound(const Vec2& a, const Vec2& b) const;

@@ -100,6 +100,57 @@ TEST(Predicates, OrientSignIsExactOnRandomNearlyCollinearTriples) {
   EXPECT_GE(collinear, 5000);
 }
 
+// Coordinates of 33 bits (multiples of 2^-30 in [-4, 4)): every difference is exact, the
+// products are not, and nearly collinear triples give products that round alike, the case
+// the exact stage decides by the rounded products' order or, when equal, their errors.
+// The paired tests (orientSignProduct, strictlySameSideFiltered) agree with the signs.
+TEST(Predicates, OrientSignIsExactWhenTheDifferencesAreExactAndThePairedTestsAgree) {
+  SplitMix64 rng(11);
+  auto coordinate = [&rng] {
+    const auto k = static_cast<std::int64_t>(rng.next() >> 31) - (std::int64_t{1} << 32);
+    return static_cast<double>(k) * 0x1p-30;
+  };
+  const double bound = orientStaticBound(8.0);
+  int zeros = 0, same_side = 0;
+  for (int n = 0; n < 20000; ++n) {
+    const Vec2 a(coordinate(), coordinate()), b(coordinate(), coordinate());
+    const double t = static_cast<double>(rng.next() >> 11) * 0x1p-53;  // c and d between a and b
+    auto nearLine = [&](double u) {
+      const Vec2 p = a + u * (b - a);
+      return Vec2(std::round(p.x() * 0x1p30) * 0x1p-30 + static_cast<double>(static_cast<int>(rng.next() % 3) - 1) * 0x1p-30,
+                  std::round(p.y() * 0x1p30) * 0x1p-30 + static_cast<double>(static_cast<int>(rng.next() % 3) - 1) * 0x1p-30);
+    };
+    const Vec2 c = nearLine(t), d = nearLine(1.0 - t);
+    const int rc = referenceSign(a, b, c), rd = referenceSign(a, b, d);
+    ASSERT_EQ(orientSign(a, b, c), rc) << n;
+    ASSERT_EQ(orientSign(b, c, a), rc) << n;
+    ASSERT_EQ(orientSign(a, b, c, bound), rc) << n;
+    ASSERT_EQ(orientSignProduct(a, b, c, d, bound), rc * rd) << n;
+    const bool filtered = strictlySameSideFiltered(a, b, c, d, bound);
+    if (filtered) {
+      ASSERT_GT(rc * rd, 0) << n;  // never claims more than the exact signs say
+    }
+    // Off the line (by a quarter of |b - a|, the coordinates staying within the bound's 8)
+    // the filter decides.
+    const Vec2 off = c + 0.25 * Vec2(-(b - a).y(), (b - a).x());
+    if (a != b) {
+      ASSERT_TRUE(strictlySameSideFiltered(a, b, off, off, bound)) << n;
+    }
+    // The midpoint (exact: 34 bits) is exactly on the line, a hair beside it is not.
+    const Vec2 m = 0.5 * (a + b), m_off(m.x() + 0x1p-31, m.y());
+    ASSERT_EQ(referenceSign(a, b, m), 0);
+    ASSERT_EQ(orientSign(a, b, m), 0) << n;
+    ASSERT_EQ(orientSignProduct(a, b, m, c, bound), 0) << n;
+    ASSERT_EQ(orientSign(a, b, m_off, bound), referenceSign(a, b, m_off)) << n;
+    zeros += referenceSign(a, b, m_off) == 0;
+    same_side += filtered;
+  }
+  // Beside the line is off it whenever b - a is not horizontal, and the filter decides
+  // some of the near-line pairs alone.
+  EXPECT_EQ(zeros, 0);
+  EXPECT_GT(same_side, 100);
+}
+
 TEST(Predicates, TheStaticBoundCoversEveryCoordinateUpToItsMagnitude) {
   // Rounded up to a power of two: 24 -> 32, 8 * 32^2 * the filter's constant.
   EXPECT_EQ(orientStaticBound(24.0), detail::kOrientErrorBound * 8.0 * 32.0 * 32.0);
