@@ -38,16 +38,20 @@ void validateCamera(const hal::CameraIntrinsics& k, const hal::CameraMount& m) {
 CameraModel::CameraModel(const hal::CameraIntrinsics& intrinsics, const hal::CameraMount& mount)
     : intrinsics_(intrinsics), mount_(mount) {
   validateCamera(intrinsics, mount);
-  rotation_ = (Eigen::AngleAxisd(mount.yaw, Vec3::UnitZ()) * Eigen::AngleAxisd(mount.pitch, Vec3::UnitY()) *
-               Eigen::AngleAxisd(mount.roll, Vec3::UnitX()))
-                  .toRotationMatrix();
+  rotation_ = rotationOf(mount);
   position_ = Vec3(mount.x, mount.y, mount.z);
 }
 
-Vec3 CameraModel::ray(double u, double v) const {
+Eigen::Matrix3d CameraModel::rotationOf(const hal::CameraMount& mount) {
+  return (Eigen::AngleAxisd(mount.yaw, Vec3::UnitZ()) * Eigen::AngleAxisd(mount.pitch, Vec3::UnitY()) *
+          Eigen::AngleAxisd(mount.roll, Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
+Vec3 CameraModel::ray(const hal::CameraIntrinsics& k, const Eigen::Matrix3d& rotation, double u, double v) {
   // Optical (x right, y down, z forward) to body (x forward, y left, z up).
-  const Vec3 body(1.0, -(u - intrinsics_.cx) / intrinsics_.fx, -(v - intrinsics_.cy) / intrinsics_.fy);
-  return rotation_ * body;
+  const Vec3 body(1.0, -(u - k.cx) / k.fx, -(v - k.cy) / k.fy);
+  return rotation * body;
 }
 
 Vec3 CameraModel::project(const Vec3& point_in_base) const {

@@ -35,7 +35,11 @@ class CameraModel {
 
   // The ray of pixel (u, v) in the base frame, scaled so that its optical z is 1: the point
   // a pixel of depth d (metres, as a DepthFrame stores it) sees is position() + d * ray(u, v).
-  Vec3 ray(double u, double v) const;
+  Vec3 ray(double u, double v) const { return ray(intrinsics_, rotation_, u, v); }
+  // The same for any rotation (a mount that changes per frame), without validating.
+  static Vec3 ray(const hal::CameraIntrinsics& intrinsics, const Eigen::Matrix3d& rotation, double u, double v);
+  // base <- camera body for a mount: Rz(yaw) * Ry(pitch) * Rx(roll), not validated.
+  static Eigen::Matrix3d rotationOf(const hal::CameraMount& mount);
   // The reverse: the pixel (u, v) and the depth (optical z) of a point in the base frame;
   // depth <= 0 for a point behind the camera.
   Vec3 project(const Vec3& point_in_base) const;

@@ -1,7 +1,8 @@
 #pragma once
 // A depth camera (docs/ARCHITECTURE.md section 4): 640 x 480 depth frames of 16-bit millimetres
 // at 30 Hz, its intrinsics and its pose on the robot. Backends: hal/openni2 (the HSR's head
-// Xtion), the simulated camera (src/world/sim_depth_camera.hpp); perception (src/perception)
+// Xtion), hal/ros (frames from a ROS transport, the pose per frame from tf), the simulated
+// camera (src/world/sim_depth_camera.hpp); perception (src/perception)
 // turns frames into an ObstacleFrame (hal/obstacles.hpp).
 
 #include "rt/clock.hpp"
@@ -27,6 +28,11 @@ struct DepthFrame {
   static constexpr int kHeight = 480;
   rt::Nanos stamp = -1;
   std::uint64_t sequence = 0;
+  // The camera's pose when the frame was taken, for a camera that moves on the robot (the
+  // HSR's head pans and tilts: backend ros, from tf at the frame's stamp). has_mount false:
+  // the camera's fixed mount() (sim, openni2). Perception uses whichever the frame says.
+  bool has_mount = false;
+  CameraMount mount;
   std::array<std::uint16_t, static_cast<std::size_t>(kWidth) * kHeight> depth_mm{};  // 0: no reading
 };
 

@@ -115,34 +115,12 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
     : config_(validated(config, mount)),
       camera_(intrinsics, mount),
       mask_(map, config.cell_m, config.static_margin_m) {
-  // The sampled rays and, per ray, the depths whose points are in the band and in range.
-  const Vec3& c = camera_.position();
-  const int s = config_.pixel_stride;
-  rays_.reserve(static_cast<std::size_t>((hal::DepthFrame::kWidth / s + 1) * (hal::DepthFrame::kHeight / s + 1)));
-  for (int v = s / 2; v < hal::DepthFrame::kHeight; v += s) {
-    for (int u = s / 2; u < hal::DepthFrame::kWidth; u += s) {
-      const Vec3 r = camera_.ray(u, v);
-      double lo = config_.min_depth_m;
-      double hi = 65.535;  // the largest depth a frame can hold
-      const double horizontal = std::hypot(r.x(), r.y());
-      if (horizontal > 0.0) hi = std::min(hi, config_.max_range_m / horizontal);
-      if (r.z() > 0.0) {
-        lo = std::max(lo, (config_.min_height_m - c.z()) / r.z());
-        hi = std::min(hi, (config_.max_height_m - c.z()) / r.z());
-      } else if (r.z() < 0.0) {
-        lo = std::max(lo, (config_.max_height_m - c.z()) / r.z());
-        hi = std::min(hi, (config_.min_height_m - c.z()) / r.z());
-      } else if (c.z() < config_.min_height_m || c.z() > config_.max_height_m) {
-        continue;
-      }
-      const double lo_mm = std::max(1.0, std::ceil(lo * 1000.0));
-      const double hi_mm = std::min(65535.0, std::floor(hi * 1000.0));
-      if (lo_mm > hi_mm) continue;  // this pixel never sees anything in the band
-      rays_.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
-                          static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u), static_cast<std::uint16_t>(lo_mm),
-                          static_cast<std::uint16_t>(hi_mm)});
-    }
-  }
+  const std::size_t sampled =
+      static_cast<std::size_t>((hal::DepthFrame::kWidth / config_.pixel_stride + 1) *
+                               (hal::DepthFrame::kHeight / config_.pixel_stride + 1));
+  rays_.reserve(sampled);
+  frame_rays_.reserve(sampled);
+  fillRays(camera_.rotation(), camera_.position(), rays_);
   // The grid reaches max_range_m from the camera wherever the camera sits on the robot
   // (within kMaxGridSide: validated above).
   const double reach = config_.max_range_m + cameraOffset(mount);
@@ -161,6 +139,54 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   hull_.assign(4 * static_cast<std::size_t>(n_) + 1, Vec2::Zero());
 }
 
+// The sampled rays and, per ray, the depths whose points are in the band and in range.
+void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3& c, std::vector<Ray>& out) const {
+  out.clear();
+  const int s = config_.pixel_stride;
+  for (int v = s / 2; v < hal::DepthFrame::kHeight; v += s) {
+    for (int u = s / 2; u < hal::DepthFrame::kWidth; u += s) {
+      const Vec3 r = CameraModel::ray(camera_.intrinsics(), rotation, u, v);
+      double lo = config_.min_depth_m;
+      double hi = 65.535;  // the largest depth a frame can hold
+      const double horizontal = std::hypot(r.x(), r.y());
+      if (horizontal > 0.0) hi = std::min(hi, config_.max_range_m / horizontal);
+      if (r.z() > 0.0) {
+        lo = std::max(lo, (config_.min_height_m - c.z()) / r.z());
+        hi = std::min(hi, (config_.max_height_m - c.z()) / r.z());
+      } else if (r.z() < 0.0) {
+        lo = std::max(lo, (config_.max_height_m - c.z()) / r.z());
+        hi = std::min(hi, (config_.min_height_m - c.z()) / r.z());
+      } else if (c.z() < config_.min_height_m || c.z() > config_.max_height_m) {
+        continue;
+      }
+      const double lo_mm = std::max(1.0, std::ceil(lo * 1000.0));
+      const double hi_mm = std::min(65535.0, std::floor(hi * 1000.0));
+      if (lo_mm > hi_mm) continue;  // this pixel never sees anything in the band
+      out.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
+                        static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u), static_cast<std::uint16_t>(lo_mm),
+                        static_cast<std::uint16_t>(hi_mm)});
+    }
+  }
+}
+
+// A frame's own mount: its rays, rebuilt only when it moved since the last frame.
+void DepthObstacleDetector::useFrameMount(const hal::CameraMount& m) {
+  if (frame_rays_built_ && m.x == frame_mount_.x && m.y == frame_mount_.y && m.z == frame_mount_.z &&
+      m.roll == frame_mount_.roll && m.pitch == frame_mount_.pitch && m.yaw == frame_mount_.yaw) {
+    return;
+  }
+  frame_mount_ = m;
+  frame_rays_built_ = true;
+  frame_position_ = Vec3(m.x, m.y, m.z);
+  const bool finite = std::isfinite(m.x) && std::isfinite(m.y) && std::isfinite(m.z) && std::isfinite(m.roll) &&
+                      std::isfinite(m.pitch) && std::isfinite(m.yaw);
+  if (!finite || !(m.z > 0.0)) {
+    frame_rays_.clear();
+    return;
+  }
+  fillRays(CameraModel::rotationOf(m), frame_position_, frame_rays_);
+}
+
 void DepthObstacleDetector::resetTracks() {
   for (Track& t : tracks_) t = Track{};
   last_stamp_ = -1;
@@ -173,7 +199,12 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
   out.sequence = frame.sequence;
   out.count = 0;
   out.dropped = 0;
-  backProject(frame, robot, stats);
+  if (frame.has_mount) {
+    useFrameMount(frame.mount);
+    backProject(frame, frame_rays_, frame_position_, robot, stats);
+  } else {
+    backProject(frame, rays_, camera_.position(), robot, stats);
+  }
   findClusters(robot, stats);
   outlineClusters(out);
   trackClusters(frame.stamp, out);
@@ -183,7 +214,8 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
 }
 
 // Step 1: pixels -> points in the band -> counts (and point sums) per grid cell.
-void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const Pose2& robot, DepthObstaclesStats& stats) {
+void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std::vector<Ray>& rays,
+                                        const Vec3& camera_position, const Pose2& robot, DepthObstaclesStats& stats) {
   const double cell = config_.cell_m;
   gi0_ = mask_.cellIndex(robot.x) - n_ / 2;
   gj0_ = mask_.cellIndex(robot.y) - n_ / 2;
@@ -194,12 +226,12 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const Pose
 
   // In grid units: the camera's position, and each ray's turn by the robot's heading.
   const double inv_cell = 1.0 / cell;
-  const Vec2 camera = robot.transform(camera_.position().head<2>());
+  const Vec2 camera = robot.transform(camera_position.head<2>());
   const double ax = (camera.x() - origin_.x()) * inv_cell, ay = (camera.y() - origin_.y()) * inv_cell;
   const double c = std::cos(robot.theta) * inv_cell * 0.001, s = std::sin(robot.theta) * inv_cell * 0.001;
   const double n = n_;
   std::size_t points = 0;
-  for (const Ray& r : rays_) {
+  for (const Ray& r : rays) {
     const std::uint16_t d_mm = frame.depth_mm[r.pixel];
     if (d_mm < r.min_mm || d_mm > r.max_mm) continue;
     const double d = d_mm;

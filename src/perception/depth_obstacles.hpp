@@ -126,6 +126,13 @@ class DepthObstacleDetector {
 
   // One frame taken when the robot's base was at `robot` (map frame). Fills `out`: stamp and
   // sequence from the frame, the obstacles nearest first. No allocation, no exception.
+  // A frame with its own mount (frame.has_mount: a head that pans and tilts) is seen from
+  // that mount, else from the constructor's. The rays of a frame's mount are rebuilt when it
+  // differs from the previous frame's (about as costly as a frame; nothing when the head
+  // holds still). The grid still reaches max_range_m from the constructor's mount: a frame
+  // mount farther from the base centre loses that much range on its far side. A frame mount
+  // must pass validateCamera (hal/ros drops those that do not); one that is not finite or
+  // not above the floor is seen as no points.
   DepthObstaclesStats process(const hal::DepthFrame& frame, const Pose2& robot, hal::ObstacleFrame& out);
 
   // Forgets every track (after a relocalisation, say): the next frame's velocities are 0.
@@ -163,7 +170,12 @@ class DepthObstacleDetector {
     double turn_rate = 0.0;  // rad/s, counter-clockwise positive
   };
 
-  void backProject(const hal::DepthFrame& frame, const Pose2& robot, DepthObstaclesStats& stats);
+  // The sampled rays of a camera with this rotation and position (base frame) into `out`,
+  // within its capacity (reserved at construction: no allocation).
+  void fillRays(const Eigen::Matrix3d& rotation, const Vec3& position, std::vector<Ray>& out) const;
+  void useFrameMount(const hal::CameraMount& mount);
+  void backProject(const hal::DepthFrame& frame, const std::vector<Ray>& rays, const Vec3& camera_position,
+                   const Pose2& robot, DepthObstaclesStats& stats);
   void findClusters(const Pose2& robot, DepthObstaclesStats& stats);
   void outlineClusters(hal::ObstacleFrame& out);
   void trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out);
@@ -175,6 +187,11 @@ class DepthObstacleDetector {
   CameraModel camera_;
   StaticMapMask mask_;
   std::vector<Ray> rays_;
+  // The rays of the last frame's own mount (frame.has_mount), and that mount.
+  std::vector<Ray> frame_rays_;
+  hal::CameraMount frame_mount_;
+  Vec3 frame_position_{0.0, 0.0, 0.0};
+  bool frame_rays_built_ = false;
   int n_ = 0;                       // grid cells per side
   int link_ = 1;                    // cluster_gap_m in cells
   std::int64_t gi0_ = 0, gj0_ = 0;  // the grid's lower-left cell on the map lattice (this frame)

@@ -52,6 +52,7 @@ class Daemon {
   void createRosLink();
   void startRosLink();
   hal::Base* rosBase();
+  std::unique_ptr<hal::DepthCamera> rosCamera();
   void startThreads();
   // Starts the thread that steps `runnable` at `hz`, as `activity`.
   void startActivity(std::unique_ptr<rt::PeriodicActivity>& activity, const char* name, rt::Runnable& runnable,
@@ -145,7 +146,7 @@ void Daemon::createWorkspaces() {
     odometry_tap_ = std::make_unique<OdometryTap>(*base, *odometry_slot_);
     base = odometry_tap_.get();
     try {
-      depth_ = makeDepthSensor(config_, sim_.get(), *odometry_slot_);
+      depth_ = makeDepthSensor(config_, sim_.get(), *odometry_slot_, rosCamera());
     } catch (const DepthCameraError& e) {
       std::string message = config_.file.string();
       message.append(": camera.backend: ").append(e.what());
@@ -193,6 +194,13 @@ void Daemon::createRosLink() {
 #endif
 }
 
+std::unique_ptr<hal::DepthCamera> Daemon::rosCamera() {
+#ifdef STAA_HAVE_ROS1
+  if (ros_) return ros_->takeCamera();
+#endif
+  return nullptr;
+}
+
 hal::Base* Daemon::rosBase() {
 #ifdef STAA_HAVE_ROS1
   return ros_->base();
@@ -207,7 +215,7 @@ void Daemon::startRosLink() {
 #ifdef STAA_HAVE_ROS1
   if (!ros_) return;
   try {
-    ros_->start(nullptr);
+    ros_->start();
   } catch (const ros::TransportError& e) {
     throw DeviceError(config_.file.string() + ": ros: " + e.what());
   }

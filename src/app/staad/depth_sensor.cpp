@@ -91,8 +91,17 @@ bool DepthSensor::read(rt::Nanos now, hal::ObstacleFrame& out) {
   return true;
 }
 
-std::unique_ptr<DepthSensor> makeDepthSensor(const DaemonConfig& config, hal::SimHal* sim, OdometrySlot& pose) {
+std::unique_ptr<DepthSensor> makeDepthSensor(const DaemonConfig& config, hal::SimHal* sim, OdometrySlot& pose,
+                                             std::unique_ptr<hal::DepthCamera> ros_camera) {
   const CameraConfig& camera = config.camera;
+  if (camera.backend == CameraBackend::kRos) {
+    if (ros_camera == nullptr) {
+      throw DepthCameraError(
+          "ros is not available: this staad was built without ROS 1 (the ROS packages were not found when it was built): "
+          "rebuild after toolchain/install-deps.sh, or use camera.backend: openni2");
+    }
+    return std::make_unique<DepthSensor>(config.map, camera, std::move(ros_camera), pose);
+  }
   if (camera.backend == CameraBackend::kSim) {
     if (sim == nullptr) throw std::logic_error("makeDepthSensor: camera.backend sim needs the simulated world");
     return std::make_unique<DepthSensor>(config.map, camera, config.sim.seed, sim->obstacles(), pose);

@@ -138,6 +138,8 @@ class DepthSensor final : public hal::ObstacleSensor {
 // openni2 opened here (OpenNI2Camera: waits up to 2 s for a first frame). Throws
 // DepthCameraError when the camera cannot be opened or OpenNI2 is not built in, and
 // std::invalid_argument for a bad value.
-std::unique_ptr<DepthSensor> makeDepthSensor(const DaemonConfig& config, hal::SimHal* sim, OdometrySlot& pose);
+// `ros_camera`: camera.backend ros's camera (the ROS link made it and feeds it), taken over.
+std::unique_ptr<DepthSensor> makeDepthSensor(const DaemonConfig& config, hal::SimHal* sim, OdometrySlot& pose,
+                                             std::unique_ptr<hal::DepthCamera> ros_camera = nullptr);
 
 }  // namespace staa::staad

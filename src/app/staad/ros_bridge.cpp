@@ -85,6 +85,13 @@ RosBridge::RosBridge(const DaemonConfig& config, Channels& channels)
   if (!(config.obstacles == ObstacleSource::kDepth && config.camera.backend == CameraBackend::kRos)) {
     transport_config_.image_topic.clear();
   }
+  if (!transport_config_.image_topic.empty()) {
+    hal::RosDepthCameraConfig c;
+    c.intrinsics = config.camera.intrinsics;
+    c.mount = config.camera.mount;
+    camera_owned_ = std::make_unique<hal::RosDepthCamera>(c);
+    camera_ = camera_owned_.get();
+  }
   if (transport_config_.base) {
     hal::RosBaseOptions o;
     o.twist_period = periodOfHz(config.control_hz);
@@ -95,10 +102,10 @@ RosBridge::RosBridge(const DaemonConfig& config, Channels& channels)
 
 RosBridge::~RosBridge() { stop(); }
 
-void RosBridge::start(hal::DepthImageSink* camera) {
+void RosBridge::start() {
   ros::TransportSinks sinks;
   sinks.base = base_.get();
-  sinks.camera = camera;
+  sinks.camera = camera_owned_ ? camera_owned_.get() : nullptr;
   sinks.map = this;
   transport_ = ros::startRos1Transport(transport_config_, sinks);
   master_ = true;
@@ -365,7 +372,10 @@ void RosBridge::fillStatus(Status& s) const {
   s.ros.maps_applied = ch_.maps_taken.load(std::memory_order_acquire);
   s.ros.maps_refused = maps_refused_.load(std::memory_order_relaxed);
   s.ros.map_import_s = map_import_s_.load(std::memory_order_relaxed);
-  s.ros.images_in = c.images_in;
+  if (camera_ != nullptr) {
+    s.ros.images_in = camera_->accepted() + camera_->droppedTotal();
+    s.ros.images_dropped = camera_->droppedTotal();
+  }
 }
 
 }  // namespace staa::staad

@@ -23,6 +23,7 @@
 #include "app/staad/config.hpp"
 #include "app/staad/ros/transport.hpp"
 #include "hal/ros/ros_base.hpp"
+#include "hal/ros/ros_depth_camera.hpp"
 #include "map/ros_import.hpp"
 #include "rt/realtime.hpp"
 #include "rt/timing_stats.hpp"
@@ -53,9 +54,12 @@ class RosBridge final : public ros::MapSink {
   RosBridge& operator=(const RosBridge&) = delete;
 
   // Starts the transport (throws ros::TransportError: no master, ...) and, with hal: ros, the
-  // publisher thread. `camera`: camera.backend: ros's sink, or null.
-  void start(hal::DepthImageSink* camera);
+  // publisher thread.
+  void start();
   hal::RosBase* base() { return base_.get(); }
+  // camera.backend: ros: the camera the transport feeds, handed to perception (which owns it
+  // from then on and outlives the bridge); null otherwise.
+  std::unique_ptr<hal::RosDepthCamera> takeCamera() { return std::move(camera_owned_); }
 
   // map: ros at start-up: the first map that imports (the ones that fail are logged), or
   // nothing after `timeout`. Service thread, before the real-time threads start.
@@ -86,6 +90,8 @@ class RosBridge final : public ros::MapSink {
   Channels& ch_;
   ros::TransportConfig transport_config_;
   std::unique_ptr<hal::RosBase> base_;
+  std::unique_ptr<hal::RosDepthCamera> camera_owned_;  // until takeCamera()
+  const hal::RosDepthCamera* camera_ = nullptr;        // for the status's counts
   std::unique_ptr<ros::Transport> transport_;
   rt::RtThread publisher_;
   std::atomic<bool> running_{false};

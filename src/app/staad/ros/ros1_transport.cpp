@@ -2,10 +2,7 @@
 // camera's that includes ROS headers (transport.hpp says why).
 #include "app/staad/ros/transport.hpp"
 
-#if __has_include("app/staad/ros/ros1_camera.hpp")
 #include "app/staad/ros/ros1_camera.hpp"
-#define STAA_ROS1_CAMERA 1
-#endif
 
 #include <actionlib/server/simple_action_server.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -109,9 +106,7 @@ class Ros1Transport final : public Transport {
   ::ros::Subscriber map_sub_;
   ::ros::Timer tf_timer_;
   std::unique_ptr<MoveBaseServer> action_;
-#ifdef STAA_ROS1_CAMERA
   std::unique_ptr<Ros1CameraInput> camera_;
-#endif
 
   std::mutex events_mutex_;  // the callback threads and the service thread; never real-time
   std::deque<GoalEvent> events_;
@@ -177,7 +172,6 @@ Ros1Transport::Ros1Transport(const TransportConfig& config, const TransportSinks
     map_nh.setCallbackQueue(&map_queue_);
     map_sub_ = map_nh.subscribe(config.map_topic, 1, &Ros1Transport::onMap, this);
   }
-#ifdef STAA_ROS1_CAMERA
   if (!config.image_topic.empty() && sinks.camera != nullptr) {
     ::ros::NodeHandle camera_nh;
     camera_nh.setCallbackQueue(&camera_queue_);
@@ -186,9 +180,9 @@ Ros1Transport::Ros1Transport(const TransportConfig& config, const TransportSinks
     topics.info_topic = config.camera_info_topic;
     topics.base_frame = config.base_frame;
     topics.tf_timeout_s = config.camera_tf_timeout_s;
+    topics.queue_size = 1;
     camera_ = std::make_unique<Ros1CameraInput>(camera_nh, *tf_, topics, *sinks.camera);
   }
-#endif
   markers_pub_ = nh_->advertise<visualization_msgs::MarkerArray>(config.markers_topic, 2);
   diagnostics_pub_ = nh_->advertise<diagnostic_msgs::DiagnosticArray>(config.diagnostics_topic, 2);
 
@@ -205,9 +199,7 @@ Ros1Transport::~Ros1Transport() {
     if (s != nullptr) s->stop();
   }
   if (action_) action_->shutdown();
-#ifdef STAA_ROS1_CAMERA
   camera_.reset();
-#endif
   action_.reset();
   tf_listener_.reset();
   nh_.reset();

@@ -121,7 +121,6 @@ struct TransportCounters {
   std::uint64_t goals_in = 0;
   std::uint64_t goals_refused = 0;
   std::uint64_t maps_in = 0;
-  std::uint64_t images_in = 0;
   std::uint64_t twists_out = 0;
   std::uint64_t localization_tf_failures = 0;
 };
