@@ -161,7 +161,7 @@ class SimBase : public ::testing::Test {
   // odom-log for `seconds_` in the background, once its first message is in.
   RosProcess startOdomLog(double seconds_) {
     RosProcess log = master_->spawn("odom-log", {kProbe, "odom-log", std::to_string(seconds_)});
-    EXPECT_EQ(log.waitForLines(1, seconds(10)).size(), 1u) << log.err();
+    EXPECT_GE(log.waitForLines(1, seconds(10)).size(), 1u) << log.err();
     return log;
   }
   static std::vector<Json> finish(RosProcess& log) {
@@ -355,7 +355,7 @@ TEST(MapPublisher, SwapsInTheSecondMapOnSigusr1AndLatchesIt) {
   const RosMaster master(testName());
   RosProcess publisher = master.spawn("map-publisher", {kMapPublisher, depot.string(), sandbox.string()});
   RosProcess watch = master.spawn("map-watch", {kProbe, "map-watch", "2", "--timeout", "15"});
-  ASSERT_EQ(watch.waitForLines(1, seconds(15)).size(), 1u) << watch.err() << publisher.err();
+  ASSERT_GE(watch.waitForLines(1, seconds(15)).size(), 1u) << watch.err() << publisher.err();
   publisher.kill(SIGUSR1);
   const std::vector<Json> maps = jsonLines(watch.waitForLines(2, seconds(10)));
   ASSERT_EQ(maps.size(), 2u) << watch.err();

@@ -18,8 +18,10 @@
 namespace staa::test {
 
 // A child process in a process group of its own (its pid is the group's id), stdin from
-// /dev/null, stdout and stderr to files. Its destructor kills the whole group (SIGKILL) and
-// reaps the child.
+// /dev/null, stdout and stderr to files, SIGINT/SIGTERM/SIGUSR1 at their defaults. Its
+// destructor kills the whole group (SIGKILL) and reaps the child. The child also gets
+// SIGKILL when the thread that started it ends (PR_SET_PDEATHSIG, so a test killed by its
+// timeout leaves nothing): start processes from the test's own thread.
 class RosProcess {
  public:
   RosProcess() = default;
@@ -97,6 +99,8 @@ class RosMaster {
   std::vector<std::string> childEnvironment(const std::vector<std::string>& extra = {}) const;
 
   // Starts argv in this graph, stdout and stderr to dir()/NAME.out and dir()/NAME.err.
+  // Private parameters given as _name:=value stay on this master after the node ends: a
+  // second run of the same node with other values needs another __name:=.
   RosProcess spawn(const std::string& name, const std::vector<std::string>& argv,
                    const std::vector<std::string>& extra_env = {}) const;
   // Spawns and waits up to `timeout` for the exit (killed after it).
