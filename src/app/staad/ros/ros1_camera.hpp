@@ -41,7 +41,7 @@ class Ros1CameraInput {
   // Subscribes both topics on `node`; `tf` and `sink` must outlive this object. Throws
   // std::invalid_argument for an empty topic or frame, queue_size < 1 or tf_timeout_s
   // outside [0, 1] s.
-  Ros1CameraInput(ros::NodeHandle& node, tf2_ros::Buffer& tf, const Ros1CameraTopics& topics,
+  Ros1CameraInput(::ros::NodeHandle& node, ::tf2_ros::Buffer& tf, const Ros1CameraTopics& topics,
                   hal::DepthImageSink& sink);
   ~Ros1CameraInput();
   Ros1CameraInput(const Ros1CameraInput&) = delete;
