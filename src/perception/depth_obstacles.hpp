@@ -128,8 +128,8 @@ class DepthObstacleDetector {
   // sequence from the frame, the obstacles nearest first. No allocation, no exception.
   // A frame with its own mount (frame.has_mount: a head that pans and tilts) is seen from
   // that mount, else from the constructor's. The rays of a frame's mount are rebuilt when it
-  // differs from the previous frame's (about as costly as a frame; nothing when the head
-  // holds still). The grid still reaches max_range_m from the constructor's mount: a frame
+  // differs from the previous frame's (19,200 rays at pixel_stride 4, a few times the cost of
+  // the rest of the frame, test_perception_alloc prints it; nothing when the head holds still). The grid still reaches max_range_m from the constructor's mount: a frame
   // mount farther from the base centre loses that much range on its far side. A frame mount
   // must pass validateCamera (hal/ros drops those that do not); one that is not finite or
   // not above the floor is seen as no points.

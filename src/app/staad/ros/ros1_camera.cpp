@@ -80,7 +80,12 @@ class Ros1CameraInput::Impl {
     if (frame.empty()) {
       return fail("the image has no header.frame_id");
     }
-    if (!tf_.canTransform(topics_.base_frame, frame, stamp, ros::Duration(topics_.tf_timeout_s), &error)) {
+    // tf2 waits only for a buffer that a thread of its own fills (a TransformListener's);
+    // without one (its timeout overload refuses), look up what is there.
+    const bool can = tf_.isUsingDedicatedThread()
+                         ? tf_.canTransform(topics_.base_frame, frame, stamp, ros::Duration(topics_.tf_timeout_s), &error)
+                         : tf_.canTransform(topics_.base_frame, frame, stamp, &error);
+    if (!can) {
       return fail(error.empty() ? "no transform " + topics_.base_frame + " <- " + frame : error);
     }
     try {

@@ -7,7 +7,8 @@
 //
 // For each image: tf base_frame <- image.header.frame_id (the optical frame) at the image's
 // stamp, tf2 interpolating between the head's joint states, waiting at most tf_timeout_s for
-// the transform to arrive (canTransform); no transform: the image is still offered, with an
+// the transform to arrive (canTransform; only when the buffer is filled by a thread of its
+// own, as tf2_ros::TransformListener's spin thread does, else tf2 refuses to wait); no transform: the image is still offered, with an
 // invalid pose, so that the sink counts it (no_pose). Callbacks run in roscpp's spinner
 // threads (normal priority); the callbacks of one subscription never overlap, so offer() is
 // called from one thread at a time.
