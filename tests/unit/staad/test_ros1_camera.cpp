@@ -285,7 +285,7 @@ TEST_F(Ros1Camera, RejectsBadTopics) {
   topics = Ros1CameraTopics{};
   topics.queue_size = 0;
   EXPECT_THROW(Ros1CameraInput(node, tf, topics, sink), std::invalid_argument);
-  EXPECT_EQ(Ros1CameraTopics{}.image_topic, "/hsrb/head_rgbd_sensor/depth_registered/image_raw");
+  EXPECT_EQ(Ros1CameraTopics{}.image_topic, "/hsrb/head_rgbd_sensor/depth_registered/image_rect_raw");
 }
 
 }  // namespace
