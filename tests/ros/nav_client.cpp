@@ -10,6 +10,10 @@
 //   bad-odom KIND COUNT [--topic /hsrb/odom]   KIND: nan | inf | back (stamps 10 s in the past)
 //   markers [--topic /staad/markers] [--timeout 10] [--with NS]
 //       the first MarkerArray (that has namespace NS): {"namespaces":{"ns":points,...}}
+//   depth-images ENCODING WIDTH HEIGHT SECONDS [--rate 30]
+//       depth images (all "no reading") with camera_info (the Xtion's nominal K) on the HSR's
+//       topics, and the static tf base_footprint -> head_rgbd_sensor_rgb_frame (1 m up, an
+//       optical frame looking ahead)
 //   diagnostics [--topic /diagnostics] [--timeout 10] [--until KEY=VALUE]
 //       the first DiagnosticArray of staad (whose KEY is VALUE): {"level":L,"message":...,"values":{...}}
 //
@@ -22,6 +26,9 @@
 #include <move_base_msgs/MoveBaseAction.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <cmath>
@@ -187,6 +194,56 @@ int badOdom(ros::NodeHandle& n, const Args& a) {
   return 0;
 }
 
+int depthImages(ros::NodeHandle& n, const Args& a) {
+  if (a.positional.size() != 4) return 2;
+  const std::string encoding = a.positional[0];
+  const auto width = static_cast<std::uint32_t>(std::atoi(a.positional[1].c_str()));
+  const auto height = static_cast<std::uint32_t>(std::atoi(a.positional[2].c_str()));
+  const double seconds = std::strtod(a.positional[3].c_str(), nullptr);
+  const std::string frame = "head_rgbd_sensor_rgb_frame";
+  tf2_ros::StaticTransformBroadcaster tf;
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = ros::Time::now();
+  t.header.frame_id = "base_footprint";
+  t.child_frame_id = frame;
+  t.transform.translation.z = 1.0;
+  // The optical frame (z ahead, x right, y down) in the base frame (x ahead, z up).
+  t.transform.rotation.x = -0.5;
+  t.transform.rotation.y = 0.5;
+  t.transform.rotation.z = -0.5;
+  t.transform.rotation.w = 0.5;
+  tf.sendTransform(t);
+  ros::Publisher images = n.advertise<sensor_msgs::Image>("/hsrb/head_rgbd_sensor/depth_registered/image_rect_raw", 2);
+  ros::Publisher infos = n.advertise<sensor_msgs::CameraInfo>("/hsrb/head_rgbd_sensor/depth_registered/camera_info", 2);
+  if (!waitSubscriber(images, 10.0) || !waitSubscriber(infos, 10.0)) return 3;
+  const std::uint32_t bytes = encoding == "32FC1" ? 4 : encoding == "16UC1" ? 2 : 3;
+  sensor_msgs::Image image;
+  image.header.frame_id = frame;
+  image.encoding = encoding;
+  image.width = width;
+  image.height = height;
+  image.step = width * bytes;
+  image.data.assign(static_cast<std::size_t>(image.step) * height, 0);
+  sensor_msgs::CameraInfo info;
+  info.header.frame_id = frame;
+  info.width = 640;
+  info.height = 480;
+  info.K = {570.3, 0.0, 319.5, 0.0, 570.3, 239.5, 0.0, 0.0, 1.0};
+  const double rate = a.number("--rate", 30.0);
+  int sent = 0;
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::ok() && ros::WallTime::now() < end) {
+    info.header.stamp = image.header.stamp = ros::Time::now();
+    infos.publish(info);
+    images.publish(image);
+    ++sent;
+    ros::WallDuration(1.0 / rate).sleep();
+  }
+  ros::WallDuration(0.3).sleep();
+  std::printf("{\"sent\":%d}\n", sent);
+  return 0;
+}
+
 int markers(ros::NodeHandle& n, const Args& a) {
   const std::string with = a.option("--with", "");
   bool done = false;
@@ -273,6 +330,7 @@ int main(int argc, char** argv) {
   if (c == "bad-odom") return badOdom(n, args);
   if (c == "markers") return markers(n, args);
   if (c == "diagnostics") return diagnostics(n, args);
+  if (c == "depth-images") return depthImages(n, args);
   std::fprintf(stderr, "staa-test-nav-client: unknown command '%s'\n", c.c_str());
   return 2;
 }

@@ -356,6 +356,38 @@ TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocate
   }
 }
 
+// camera.backend: ros through staad: frames from the HSR's depth topics keep the obstacle
+// input fresh; wrong encodings and sizes are counted and dropped, and the robot is held
+// (stale obstacles) until good frames come again.
+TEST_F(StaadOverRos, DepthImagesOverRosFeedPerceptionAndBadOnesAreCountedAndDropped) {
+  startMap({depotYaml().string()});
+  startBase();
+  std::string config = readFile(writeConfig());
+  config.replace(config.find("obstacles: none"), 15, "obstacles: depth\ncamera: {backend: ros}");
+  const fs::path file = dir_ / "camera.yaml";
+  std::ofstream(file) << config;
+  startStaad(file);
+  const auto waiting = pollStatus([](const Json& s) { return s["fault"] == "stale_obstacles"; }, milliseconds(3000));
+  ASSERT_TRUE(waiting) << "no frames yet: held";
+  // Frames flowing: the fault clears while they come (16UC1 millimetres, then 32FC1 metres).
+  for (const char* encoding : {"16UC1", "32FC1"}) {
+    RosProcess images = master_->spawn(std::string("images-") + encoding,
+                                       {kNav, "depth-images", encoding, "640", "480", "3"});
+    const auto clear = pollStatus([](const Json& s) { return s["fault"].is_null(); }, milliseconds(2500));
+    ASSERT_TRUE(clear) << encoding << " frames feed perception: " << images.err();
+    EXPECT_EQ((*clear)["ros"]["images"]["dropped"], 0);
+    EXPECT_EQ(images.wait(milliseconds(10'000)), 0) << images.err();
+  }
+  EXPECT_GT((*status())["ros"]["images"]["in"].get<int>(), 60);
+  nav({"depth-images", "rgb8", "640", "480", "1"});
+  nav({"depth-images", "16UC1", "320", "240", "1"});
+  const Json bad = *status();
+  EXPECT_GE(bad["ros"]["images"]["dropped"].get<int>(), 40);
+  EXPECT_EQ(bad["fault"], "stale_obstacles") << "bad frames do not count as fresh: the robot is held";
+  EXPECT_EQ(bad["command"][0], 0.0);
+  EXPECT_EQ(bad["rt_allocations"], 0);
+}
+
 TEST_F(StaadOverRos, RoslaunchStartsStaadWithTheLaunchFile) {
   // The package as installed: package.xml, the launch file and staad beside them.
   const fs::path pkg = dir_ / "pkgs/staa";
