@@ -14,6 +14,7 @@
 //       depth images (all "no reading") with camera_info (the Xtion's nominal K) on the HSR's
 //       topics, and the static tf base_footprint -> head_rgbd_sensor_rgb_frame (1 m up, an
 //       optical frame looking ahead)
+//   static-tf PARENT CHILD X Y YAW SECONDS    a static transform, kept up for SECONDS
 //   diagnostics [--topic /diagnostics] [--timeout 10] [--until KEY=VALUE]
 //       the first DiagnosticArray of staad (whose KEY is VALUE): {"level":L,"message":...,"values":{...}}
 //
@@ -244,6 +245,24 @@ int depthImages(ros::NodeHandle& n, const Args& a) {
   return 0;
 }
 
+int staticTf(const Args& a) {
+  if (a.positional.size() != 6) return 2;
+  tf2_ros::StaticTransformBroadcaster tf;
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = ros::Time::now();
+  t.header.frame_id = a.positional[0];
+  t.child_frame_id = a.positional[1];
+  t.transform.translation.x = std::strtod(a.positional[2].c_str(), nullptr);
+  t.transform.translation.y = std::strtod(a.positional[3].c_str(), nullptr);
+  const double yaw = std::strtod(a.positional[4].c_str(), nullptr);
+  t.transform.rotation.z = std::sin(yaw / 2.0);
+  t.transform.rotation.w = std::cos(yaw / 2.0);
+  tf.sendTransform(t);
+  std::printf("{\"sent\":true}\n");
+  ros::WallDuration(std::strtod(a.positional[5].c_str(), nullptr)).sleep();
+  return 0;
+}
+
 int markers(ros::NodeHandle& n, const Args& a) {
   const std::string with = a.option("--with", "");
   bool done = false;
@@ -331,6 +350,7 @@ int main(int argc, char** argv) {
   if (c == "markers") return markers(n, args);
   if (c == "diagnostics") return diagnostics(n, args);
   if (c == "depth-images") return depthImages(n, args);
+  if (c == "static-tf") return staticTf(args);
   std::fprintf(stderr, "staa-test-nav-client: unknown command '%s'\n", c.c_str());
   return 2;
 }

@@ -316,6 +316,30 @@ TEST_F(StaadOverRos, BadOdometryIsCountedDroppedAndBrakesAndALocalizationJumpIsA
   EXPECT_NEAR((*jumped)["pose"][1].get<double>(), kStartY + 0.5, 0.02);
 }
 
+// localization.source: tf: map -> base_footprint through a map -> odom transform (AMCL's) and
+// the base's odom -> base_footprint; and a goal given in the odom frame, transformed into map.
+TEST_F(StaadOverRos, LocalizationFromTfAndAGoalInTheOdomFrame) {
+  startMap({depotYaml().string()});
+  startBase(0.0, 0.0, 0.0);  // odometry starts at the odom frame's origin
+  startStaad(writeConfig("  localization: {source: tf, tf_hz: 20}\n"));
+  EXPECT_NEAR((*status())["pose"][0].get<double>(), 0.0, 0.01) << "no transform yet: the odometry as it is";
+  // The odom frame sits at the depot's start spot.
+  RosProcess tf = master_->spawn("tf", {kNav, "static-tf", "map", "odom", std::to_string(kStartX), std::to_string(kStartY),
+                                        "0", "60"});
+  const auto located = pollStatus([](const Json& s) { return s["base"]["localization"]["fixes"].get<int>() >= 1; },
+                                  milliseconds(5000));
+  ASSERT_TRUE(located) << tf.err();
+  EXPECT_NEAR((*located)["pose"][0].get<double>(), kStartX, 0.01);
+  EXPECT_NEAR((*located)["pose"][1].get<double>(), kStartY, 0.01);
+  EXPECT_NEAR((*located)["base"]["localization"]["last_jump_m"].get<double>(), std::hypot(kStartX, kStartY), 0.01);
+  // 1.5 m ahead in the odom frame is (11.5, 2.25) in the map.
+  const Json done = nav({"move-base", "1.5", "0", "0", "--frame", "odom"});
+  EXPECT_EQ(done["state"], "SUCCEEDED") << done.dump();
+  const Json at = *status();
+  EXPECT_LE(distance(at, kStartX + 1.5, kStartY), 0.2 + 1e-6);
+  EXPECT_DOUBLE_EQ(at["goal"][0].get<double>(), kStartX + 1.5);
+}
+
 TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocateNothing) {
   startMap({depotYaml().string()});
   startBase();
