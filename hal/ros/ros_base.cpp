@@ -155,7 +155,8 @@ void RosBase::write(rt::Nanos now, const VelocityCommand& command) {
   t.command_stamp_ns = command.stamp;
   t.odometry_stamp_ns = command.odometry_stamp;
   twist_out_.publish();
-  twist_ready_.release();  // lock-free: an atomic and, with a waiter, one futex wake
+  // Lock-free: an atomic and, with a waiter, one futex wake.
+  if (!twist_signalled_.exchange(true, std::memory_order_acq_rel)) twist_ready_.release();
   last_twist_at_ = now;
   last_twist_command_ = command.stamp;
 }
@@ -175,7 +176,9 @@ CommandSent RosBase::lastCommandSent() const {
 }
 
 bool RosBase::waitTwist(rt::Nanos timeout) {
-  return twist_ready_.try_acquire_for(std::chrono::nanoseconds(timeout));
+  if (!twist_ready_.try_acquire_for(std::chrono::nanoseconds(timeout))) return false;
+  twist_signalled_.store(false, std::memory_order_release);  // before takeTwist: a later write signals again
+  return true;
 }
 
 bool RosBase::takeTwist(TwistSample& out) {

@@ -83,6 +83,8 @@ class RosBase final : public Base, public BaseSink {
   // base thread -> publisher thread
   rt::TripleBuffer<TwistSample> twist_out_;
   std::binary_semaphore twist_ready_{0};
+  // Set while a release is outstanding: a binary semaphore must not be released twice.
+  std::atomic<bool> twist_signalled_{false};
   std::atomic<std::int64_t> sent_command_stamp_{-1};
   std::atomic<std::int64_t> sent_at_{-1};
 

@@ -18,10 +18,7 @@ namespace {
 
 rt::Nanos periodOfHz(double hz) { return hz > 0.0 ? static_cast<rt::Nanos>(std::llround(1e9 / hz)) : 0; }
 
-rt::Nanos monotonicNow() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
+rt::Nanos monotonicNow() { return rt::MonotonicClock().now(); }
 
 std::string fixed(double value, int digits = 3) {
   char text[48];
@@ -213,8 +210,7 @@ void RosBridge::pollMaps(std::ostream& log) {
   ++maps_handed_;
 }
 
-void RosBridge::pollGoals(const Status& status, Service& service, std::ostream& log) {
-  (void)status;
+void RosBridge::pollGoals(Service& service, std::ostream& log) {
   ros::GoalEvent e;
   while (transport_->takeGoalEvent(e)) {
     const char* from = e.from_action ? "move_base action" : "/move_base_simple/goal";
@@ -254,8 +250,7 @@ void RosBridge::pollGoals(const Status& status, Service& service, std::ostream& 
   }
 }
 
-void RosBridge::trackActionGoal(rt::Nanos now, const Status& s, Service& service, std::ostream& log) {
-  (void)service;
+void RosBridge::trackActionGoal(rt::Nanos now, const Status& s, std::ostream& log) {
   if (!action_active_) return;
   if (s.goal_id > action_goal_id_) {
     // Another client's goal (the control socket) replaced it.
@@ -336,8 +331,8 @@ void RosBridge::publishDiagnostics(Service& service) {
 void RosBridge::poll(rt::Nanos now, Service& service, std::ostream& log) {
   if (!transport_) return;
   const Status& status = service.latest();
-  pollGoals(status, service, log);
-  trackActionGoal(now, status, service, log);
+  pollGoals(service, log);
+  trackActionGoal(now, status, log);
   pollMaps(log);
   if (config_.ros.markers_hz > 0.0 && now >= next_viz_) {
     publishViz();

@@ -25,6 +25,7 @@
 #include "hal/ros/ros_base.hpp"
 #include "hal/ros/ros_depth_camera.hpp"
 #include "map/ros_import.hpp"
+#include "rt/clock.hpp"
 #include "rt/realtime.hpp"
 #include "rt/timing_stats.hpp"
 
@@ -80,8 +81,8 @@ class RosBridge final : public ros::MapSink {
 
  private:
   void publishTwists();
-  void pollGoals(const Status& status, Service& service, std::ostream& log);
-  void trackActionGoal(rt::Nanos now, const Status& status, Service& service, std::ostream& log);
+  void pollGoals(Service& service, std::ostream& log);
+  void trackActionGoal(rt::Nanos now, const Status& status, std::ostream& log);
   void pollMaps(std::ostream& log);
   void publishViz();
   void publishDiagnostics(Service& service);
