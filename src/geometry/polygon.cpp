@@ -3,7 +3,11 @@
 #include "geometry/predicates.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <limits>
+#include <span>
+#include <vector>
 
 namespace staa {
 
@@ -100,29 +104,122 @@ double distanceToEdges(const Vec2& p, PolygonView poly) {
   return std::sqrt(best2);
 }
 
-std::optional<EdgePair> findSelfIntersection(PolygonView poly) {
+namespace {
+// Whether edges i < j of a polygon of n >= 3 vertices offend simplicity: adjacent edges
+// fold back over each other, other edges share a point.
+bool edgesOffend(PolygonView poly, std::size_t i, std::size_t j) {
+  const std::size_t n = poly.size();
+  const Vec2& a = poly[i];
+  const Vec2& b = poly[(i + 1) % n];
+  const Vec2& c = poly[j];
+  const Vec2& d = poly[(j + 1) % n];
+  const bool adjacent_next = (j == i + 1);
+  const bool adjacent_prev = (i == 0 && j == n - 1);
+  if (adjacent_next || adjacent_prev) {
+    if (n == 3) return false;  // a triangle's edges are all adjacent
+    // Adjacent edges share one vertex; they must not fold back over each other.
+    const Vec2& shared = adjacent_next ? b : a;
+    const Vec2& p = adjacent_next ? a : b;  // the other end of edge i
+    const Vec2& q = adjacent_next ? d : c;  // the other end of edge j
+    return orientSign(shared, p, q) == 0 && (p - shared).dot(q - shared) > 0.0;
+  }
+  return segmentsIntersect(a, b, c, d);
+}
+
+// Uniform grid over the polygon's box with about one cell per edge; each edge is listed in
+// every cell its bounding box covers (CSR layout). Two edges that share a point share a
+// cell: the point lies in both boxes and the cell index is monotone in the coordinate.
+class EdgeGrid {
+ public:
+  explicit EdgeGrid(PolygonView poly) : poly_(poly) {
+    const Box box = boundingBox(poly);
+    origin_ = box.min;
+    const double n = static_cast<double>(poly.size());
+    const double w = box.width(), h = box.height();
+    const double side = std::sqrt(w * h / n);
+    // A degenerate box (all on a line) gets one row or column of n cells.
+    const double cell = side > 0.0 ? side : std::max(w, h) / n;
+    inv_ = cell > 0.0 ? 1.0 / cell : 0.0;
+    cols_ = cellsAlong(w);
+    rows_ = cellsAlong(h);
+    offsets_.assign(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_) + 1, 0);
+    forEachEdgeCell([&](std::size_t, std::size_t c) { ++offsets_[c + 1]; });
+    for (std::size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
+    edges_.resize(offsets_.back());
+    std::vector<std::size_t> cursor(offsets_.begin(), offsets_.end() - 1);
+    forEachEdgeCell([&](std::size_t e, std::size_t c) { edges_[cursor[c]++] = static_cast<std::uint32_t>(e); });
+  }
+
+  // Calls visit(c) for every cell index covered by edge e's box.
+  template <typename Visit>
+  void forEachCellOf(std::size_t e, Visit&& visit) const {
+    const Vec2& a = poly_[e];
+    const Vec2& b = poly_[(e + 1) % poly_.size()];
+    const std::size_t x0 = column(std::min(a.x(), b.x())), x1 = column(std::max(a.x(), b.x()));
+    const std::size_t y0 = row(std::min(a.y(), b.y())), y1 = row(std::max(a.y(), b.y()));
+    for (std::size_t y = y0; y <= y1; ++y) {
+      for (std::size_t x = x0; x <= x1; ++x) visit(y * static_cast<std::size_t>(cols_) + x);
+    }
+  }
+  std::span<const std::uint32_t> cellEdges(std::size_t c) const {
+    return {edges_.data() + offsets_[c], offsets_[c + 1] - offsets_[c]};
+  }
+
+ private:
+  // Cells are capped at 2^20 per axis (and so at about n in total, see the constructor).
+  int cellsAlong(double extent) const {
+    return static_cast<int>(std::clamp(std::floor(extent * inv_) + 1.0, 1.0, 1048576.0));
+  }
+  std::size_t index(double offset, int count) const {
+    const double k = std::floor(offset * inv_);
+    return static_cast<std::size_t>(std::clamp(k, 0.0, static_cast<double>(count - 1)));
+  }
+  std::size_t column(double x) const { return index(x - origin_.x(), cols_); }
+  std::size_t row(double y) const { return index(y - origin_.y(), rows_); }
+  template <typename Visit>
+  void forEachEdgeCell(Visit&& visit) const {
+    for (std::size_t e = 0; e < poly_.size(); ++e) forEachCellOf(e, [&](std::size_t c) { visit(e, c); });
+  }
+
+  PolygonView poly_;
+  Vec2 origin_;
+  double inv_ = 0.0;
+  int cols_ = 1;
+  int rows_ = 1;
+  std::vector<std::size_t> offsets_;
+  std::vector<std::uint32_t> edges_;
+};
+}  // namespace
+
+std::optional<EdgePair> findSelfIntersectionQuadratic(PolygonView poly) {
   const std::size_t n = poly.size();
   if (n < 3) return std::nullopt;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec2& a = poly[i];
-    const Vec2& b = poly[(i + 1) % n];
-    if (a == b) return EdgePair{i, i};  // zero-length edge: a repeated vertex
+    if (poly[i] == poly[(i + 1) % n]) return EdgePair{i, i};  // zero-length edge: a repeated vertex
     for (std::size_t j = i + 1; j < n; ++j) {
-      const Vec2& c = poly[j];
-      const Vec2& d = poly[(j + 1) % n];
-      const bool adjacent_next = (j == i + 1);
-      const bool adjacent_prev = (i == 0 && j == n - 1);
-      if (adjacent_next || adjacent_prev) {
-        // Adjacent edges share one vertex; they must not fold back over each other.
-        const Vec2& shared = adjacent_next ? b : a;
-        const Vec2& p = adjacent_next ? a : b;  // the other end of edge i
-        const Vec2& q = adjacent_next ? d : c;  // the other end of edge j
-        if (n == 3) continue;                   // a triangle's edges are all adjacent
-        if (orientSign(shared, p, q) == 0 && (p - shared).dot(q - shared) > 0.0) return EdgePair{i, j};
-        continue;
-      }
-      if (segmentsIntersect(a, b, c, d)) return EdgePair{i, j};
+      if (edgesOffend(poly, i, j)) return EdgePair{i, j};
     }
+  }
+  return std::nullopt;
+}
+
+std::optional<EdgePair> findSelfIntersection(PolygonView poly) {
+  const std::size_t n = poly.size();
+  if (n < 3) return std::nullopt;
+  // Small polygons: the grid would cost more than it saves.
+  if (n <= 32) return findSelfIntersectionQuadratic(poly);
+  const EdgeGrid grid(poly);
+  // The same pairs in the same order as the quadratic scan, less those whose boxes share no
+  // cell (they cannot touch): the first offending pair is the same one.
+  for (std::size_t i = 0; i < n; ++i) {
+    if (poly[i] == poly[(i + 1) % n]) return EdgePair{i, i};
+    std::size_t first = n;
+    grid.forEachCellOf(i, [&](std::size_t c) {
+      for (const std::uint32_t j : grid.cellEdges(c)) {
+        if (j > i && j < first && edgesOffend(poly, i, j)) first = j;
+      }
+    });
+    if (first < n) return EdgePair{i, first};
   }
   return std::nullopt;
 }

@@ -37,12 +37,16 @@ double distancePointSegment(const Vec2& p, const Vec2& a, const Vec2& b);
 double distanceToEdges(const Vec2& p, PolygonView poly);
 
 // A simple polygon: no two non-adjacent edges touch, adjacent edges meet only at their shared
-// vertex. Returns the index of the first offending edge pair, or nullopt when simple.
-// O(n^2): for validation at load time, not for the cycle.
+// vertex. Returns the first offending edge pair (i < j, smallest i, then smallest j; {i, i}
+// for a zero-length edge i), or nullopt when simple. Load-time validation, not for the cycle:
+// it allocates an edge grid, and tests only edge pairs whose boxes share a grid cell (about
+// linear in n for real outlines; quadratic only when most edges' boxes overlap each other).
 struct EdgePair {
   std::size_t first;
   std::size_t second;
 };
 std::optional<EdgePair> findSelfIntersection(PolygonView poly);
+// The same answer by testing every pair, O(n^2): the tests' oracle.
+std::optional<EdgePair> findSelfIntersectionQuadratic(PolygonView poly);
 
 }  // namespace staa
