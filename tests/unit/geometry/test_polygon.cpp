@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
 namespace staa {
 namespace {
 
@@ -68,4 +72,57 @@ TEST(Polygon, FindsSelfIntersectionsAndAcceptsSimplePolygons) {
 }
 
 }  // namespace
+}  // namespace staa
+
+namespace staa {
+
+namespace {
+// A random star-shaped polygon (simple) of n vertices around the origin, from a seeded LCG.
+Polygon randomStar(std::size_t n, std::uint64_t seed) {
+  Polygon p;
+  for (std::size_t k = 0; k < n; ++k) {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    const double r = 1.0 + static_cast<double>(seed >> 40) / static_cast<double>(1ULL << 24);
+    const double a = 6.283185307179586 * static_cast<double>(k) / static_cast<double>(n);
+    p.push_back({std::round(r * std::cos(a) * 64.0) / 64.0, std::round(r * std::sin(a) * 64.0) / 64.0});
+  }
+  return p;
+}
+}  // namespace
+
+TEST(Polygon, GridSelfIntersectionMatchesQuadraticOracle) {
+  // Random stars, some with two vertices swapped (a crossing pair), on a coarse lattice so that
+  // touching vertices, collinear overlaps and repeated vertices occur.
+  std::size_t rejected = 0;
+  for (std::uint64_t s = 1; s <= 3000; ++s) {
+    Polygon p = randomStar(33 + s % 60, s);
+    if (s % 2 == 0) std::swap(p[s % p.size()], p[(s * 7 + 3) % p.size()]);
+    const auto fast = findSelfIntersection(p);
+    const auto slow = findSelfIntersectionQuadratic(p);
+    ASSERT_EQ(fast.has_value(), slow.has_value()) << "seed " << s;
+    if (fast) {
+      ++rejected;
+      EXPECT_EQ(fast->first, slow->first) << "seed " << s;
+      EXPECT_EQ(fast->second, slow->second) << "seed " << s;
+    }
+  }
+  EXPECT_GT(rejected, 1000u);
+}
+
+TEST(Polygon, GridSelfIntersectionBigCircle) {
+  Polygon c;
+  const std::size_t n = 200000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a = 6.283185307179586 * static_cast<double>(k) / static_cast<double>(n);
+    c.push_back({10.0 * std::cos(a), 10.0 * std::sin(a)});
+  }
+  EXPECT_FALSE(findSelfIntersection(c).has_value());
+  // One crossing pair far from vertex 0: edges 100000 and 100001 become a bow-tie.
+  std::swap(c[100001], c[100002]);
+  const auto e = findSelfIntersection(c);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->first, 100000u);
+  EXPECT_EQ(e->second, 100002u);
+}
+
 }  // namespace staa
