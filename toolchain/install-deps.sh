@@ -23,6 +23,9 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
   librsvg2-bin   # rsvg-convert: SVG -> PNG for the README picture and experiment plots
+  # The timing measurements (tests/timing): instruction counts, the platform's own wake-up
+  # latency beside staad's, and a load on every core.
+  valgrind rt-tests stress-ng
   libopenni2-dev # OpenNI2: the HSR's head Xtion (hal/openni2, built only when found)
   # ROS 1 (Noetic-era, Debian 12): staad's ROS link (src/app/staad/ros, built only when found)
   # and its tests, which start a master, roslaunch and rosbag of their own.
