@@ -142,6 +142,10 @@ class EdgeGrid {
     inv_ = cell > 0.0 ? 1.0 / cell : 0.0;
     cols_ = cellsAlong(w);
     rows_ = cellsAlong(h);
+    // Edges whose boxes cover many cells (the spikes of a star) would list each edge in a
+    // large share of the grid: count the entries first, without visiting them.
+    for (std::size_t e = 0; e < poly.size(); ++e) entries_ += cellsOf(e);
+    if (!useful()) return;
     offsets_.assign(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_) + 1, 0);
     forEachEdgeCell([&](std::size_t, std::size_t c) { ++offsets_[c + 1]; });
     for (std::size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
@@ -161,6 +165,11 @@ class EdgeGrid {
       for (std::size_t x = x0; x <= x1; ++x) visit(y * static_cast<std::size_t>(cols_) + x);
     }
   }
+  // Whether the grid was built: at most kMaxEntriesPerEdge entries per edge on average.
+  // Otherwise the boxes overlap so much that the grid would cost as much memory as the
+  // quadratic scan costs time, and the caller takes that scan.
+  static constexpr double kMaxEntriesPerEdge = 64.0;
+  bool useful() const { return entries_ <= kMaxEntriesPerEdge * static_cast<double>(poly_.size()); }
   std::span<const std::uint32_t> cellEdges(std::size_t c) const {
     return {edges_.data() + offsets_[c], offsets_[c + 1] - offsets_[c]};
   }
@@ -174,6 +183,13 @@ class EdgeGrid {
     const double k = std::floor(offset * inv_);
     return static_cast<std::size_t>(std::clamp(k, 0.0, static_cast<double>(count - 1)));
   }
+  double cellsOf(std::size_t e) const {
+    const Vec2& a = poly_[e];
+    const Vec2& b = poly_[(e + 1) % poly_.size()];
+    const double nx = static_cast<double>(column(std::max(a.x(), b.x())) - column(std::min(a.x(), b.x())) + 1);
+    const double ny = static_cast<double>(row(std::max(a.y(), b.y())) - row(std::min(a.y(), b.y())) + 1);
+    return nx * ny;
+  }
   std::size_t column(double x) const { return index(x - origin_.x(), cols_); }
   std::size_t row(double y) const { return index(y - origin_.y(), rows_); }
   template <typename Visit>
@@ -186,6 +202,7 @@ class EdgeGrid {
   double inv_ = 0.0;
   int cols_ = 1;
   int rows_ = 1;
+  double entries_ = 0.0;
   std::vector<std::size_t> offsets_;
   std::vector<std::uint32_t> edges_;
 };
@@ -209,6 +226,7 @@ std::optional<EdgePair> findSelfIntersection(PolygonView poly) {
   // Small polygons: the grid would cost more than it saves.
   if (n <= 32) return findSelfIntersectionQuadratic(poly);
   const EdgeGrid grid(poly);
+  if (!grid.useful()) return findSelfIntersectionQuadratic(poly);
   // The same pairs in the same order as the quadratic scan, less those whose boxes share no
   // cell (they cannot touch): the first offending pair is the same one.
   for (std::size_t i = 0; i < n; ++i) {

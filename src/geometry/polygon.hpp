@@ -40,7 +40,9 @@ double distanceToEdges(const Vec2& p, PolygonView poly);
 // vertex. Returns the first offending edge pair (i < j, smallest i, then smallest j; {i, i}
 // for a zero-length edge i), or nullopt when simple. Load-time validation, not for the cycle:
 // it allocates an edge grid, and tests only edge pairs whose boxes share a grid cell (about
-// linear in n for real outlines; quadratic only when most edges' boxes overlap each other).
+// linear in n for real outlines). When the edges' boxes overlap so much that the grid would
+// list more than 64 entries per edge (a star's spikes), it scans all pairs instead: O(n^2)
+// time, O(n) memory.
 struct EdgePair {
   std::size_t first;
   std::size_t second;

@@ -125,4 +125,24 @@ TEST(Polygon, GridSelfIntersectionBigCircle) {
   EXPECT_EQ(e->second, 100002u);
 }
 
+TEST(Polygon, SpikyStarFallsBackToTheScanWithTheSameAnswer) {
+  // Long spikes from near the centre: every spike's box covers a large share of any grid, so
+  // the grid is not built (its memory would grow with n^2) and the answer is the scan's.
+  Polygon star;
+  const std::size_t n = 4000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a = 6.283185307179586 * static_cast<double>(k) / static_cast<double>(n);
+    const double r = k % 2 == 0 ? 100.0 : 0.5;
+    star.push_back({r * std::cos(a), r * std::sin(a)});
+  }
+  EXPECT_FALSE(findSelfIntersection(star).has_value());
+  std::swap(star[1001], star[1003]);  // two inner vertices swapped: their spikes cross
+  const auto fast = findSelfIntersection(star);
+  const auto slow = findSelfIntersectionQuadratic(star);
+  ASSERT_TRUE(fast.has_value());
+  ASSERT_TRUE(slow.has_value());
+  EXPECT_EQ(fast->first, slow->first);
+  EXPECT_EQ(fast->second, slow->second);
+}
+
 }  // namespace staa
