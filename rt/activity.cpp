@@ -61,12 +61,12 @@ void PeriodicActivity::run() {
   started_.store(true, std::memory_order_release);
   while (!stop_requested_.load(std::memory_order_acquire)) {
     const Wake wake = loop.wait();
-    // The body's own CPU time tells an execution overrun (ours) from a body kept off the CPU
-    // (the platform's: preemption, a virtual machine's stolen time).
+    // The body's own CPU time and its measured stalls tell an execution overrun (ours) from
+    // a body kept off the CPU (the platform's: preemption, a virtual machine's stolen time).
     const Nanos cpu0 = clock_.threadCpuTime();
     runnable_.step(wake.woke);
     const Nanos cpu1 = clock_.threadCpuTime();
-    loop.finish(cpu0 >= 0 && cpu1 >= 0 ? cpu1 - cpu0 : -1);
+    loop.finish(cpu0 >= 0 && cpu1 >= 0 ? cpu1 - cpu0 : -1, runnable_.lastStall());
     counters_.store(loop.counters());
   }
   runnable_.stop(clock_.now());

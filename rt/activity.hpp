@@ -4,7 +4,7 @@
 // threads, so a test steps it in lockstep on its own time line. A PeriodicActivity owns the
 // thread that steps it: the thread's priority, CPU and name (rt::RtThread), the schedule on
 // absolute deadlines with its overrun attribution (rt::PeriodicLoop: the body's CPU time from
-// the clock), and the timing other threads read while it runs.
+// the clock, its stalls from the runnable), and the timing other threads read while it runs.
 //
 // On the activity's thread, in order: the loop is created (deadline 0 = now + period; its
 // histograms are allocated here), Runnable::start(loop), the thread marks itself real-time
@@ -36,6 +36,10 @@ class Runnable {
   virtual void step(Nanos now) = 0;
   // After the last step, on the same thread, still real-time.
   virtual void stop(Nanos now) { (void)now; }
+  // The largest gap between two clock reads of the last step (rt/stall_probe.hpp), 0 when
+  // the runnable does not measure it: the periodic loop tells a stall of the platform from
+  // an overrun of ours with it.
+  virtual Nanos lastStall() const { return 0; }
 };
 
 // A periodic thread's timing as other threads read it.

@@ -18,14 +18,14 @@ timespec toTimespec(Nanos t) {
   return ts;
 }
 
+}  // namespace
+
 Nanos monotonicNow() {
   timespec ts{};
   // CLOCK_MONOTONIC cannot fail with a valid pointer; the result is not checked.
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
 }
-
-}  // namespace
 
 Nanos threadCpuTime() {
   timespec ts{};

@@ -13,6 +13,9 @@ using Nanos = std::int64_t;  // nanoseconds on CLOCK_MONOTONIC (or a test's time
 constexpr Nanos kNanosPerMilli = 1'000'000;
 constexpr Nanos kNanosPerSecond = 1'000'000'000;
 
+// CLOCK_MONOTONIC now (MonotonicClock::nowFunction() returns this function).
+Nanos monotonicNow();
+
 // CPU time consumed by the calling thread so far (CLOCK_THREAD_CPUTIME_ID), -1 if unavailable.
 Nanos threadCpuTime();
 

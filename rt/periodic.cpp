@@ -37,11 +37,16 @@ Wake PeriodicLoop::wait() {
 
 std::uint64_t PeriodicLoop::finish() { return finish(-1); }
 
-std::uint64_t PeriodicLoop::finish(Nanos cpu_time) {
+std::uint64_t PeriodicLoop::finish(Nanos cpu_time) { return finish(cpu_time, 0); }
+
+std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall) {
   const Nanos now = clock_.now();
   last_exec_ = now - last_wake_.woke;
   exec_.record(last_exec_);
   ++counters_.cycles;
+  const bool stalled = stall >= kStallGap;
+  const Nanos own = stalled ? last_exec_ - stall : last_exec_;
+  if (own > counters_.max_own_execution) counters_.max_own_execution = own;
 
   // Deadlines are computed from the start, never accumulated, so they stay exactly
   // start + k * period however many cycles run.
@@ -54,6 +59,8 @@ std::uint64_t PeriodicLoop::finish(Nanos cpu_time) {
     ++counters_.overruns;
     if (last_exec_ <= period_) {
       ++counters_.late_wakeups;
+    } else if (stalled && own <= period_) {
+      ++counters_.stalls;
     } else if (cpu_time >= 0 && cpu_time <= period_) {
       ++counters_.preempted;
     } else {

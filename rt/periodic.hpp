@@ -2,14 +2,18 @@
 // A periodic schedule on absolute deadlines (docs/ARCHITECTURE.md section 3): deadline k is
 // start + k * period. After a cycle's body the next deadline is the first one still in the
 // future: when the body ran past one or more deadlines, an overrun is counted and the missed
-// periods are skipped (no burst of catch-up cycles). Every missed deadline is attributed:
-//   - execution overrun (ours): the body itself took longer than the period;
-//   - late wake-up (the platform's): the body fit in a period, but woke so late that it ended
-//     past the next deadline;
+// periods are skipped (no burst of catch-up cycles). Every missed deadline is attributed, in
+// this order (exec: the body's wall-clock time from its wake-up to its end):
+//   - late wake-up (the platform's): exec fit in a period, but the body woke so late that it
+//     ended past the next deadline;
+//   - stall (the platform's): given the largest gap between two clock reads of the body
+//     (finish(cpu_time, stall), rt/stall_probe.hpp), a gap of at least kStallGap during
+//     which the thread did not run, without which exec would have fit in a period;
 //   - preempted (the platform's): given the body's own CPU time (finish(cpu_time)), the body
 //     needed less than a period of CPU but was kept off the CPU (preemption, a virtual
-//     machine's stolen time) until it ended past the next deadline. Without the CPU time,
-//     a body longer than a period counts as an execution overrun.
+//     machine's stolen time) until it ended past the next deadline;
+//   - execution overrun (ours): the body's own work took longer than the period. Without
+//     the CPU time, a body longer than a period counts as one.
 // No allocation; not thread-safe (one thread owns a loop).
 
 #include "rt/clock.hpp"
@@ -19,14 +23,23 @@
 
 namespace staa::rt {
 
+// A gap between two clock reads of a body at least this long is a stall of the platform: far
+// above the work between two reads (a planner pop, a step of the cycle: microseconds), and
+// above a scheduler's tick, so a few ordinary preemptions never add up to one.
+constexpr Nanos kStallGap = 3 * kNanosPerMilli;
+
 struct PeriodicCounters {
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;             // cycles that ended after the next deadline
   std::uint64_t execution_overruns = 0;   // ... of them, because the body took > period
   std::uint64_t late_wakeups = 0;         // ... of them, because the wake-up was late
   std::uint64_t preempted = 0;            // ... of them, because the body was kept off the CPU
+  std::uint64_t stalls = 0;               // ... of them, because of a measured stall (>= kStallGap)
   std::uint64_t skipped_periods = 0;      // deadlines dropped in all
   std::uint64_t sleep_errors = 0;         // sleepUntil returned non-zero
+  // The longest body less its stall (a gap >= kStallGap, when one was measured): the
+  // longest the body's own work took, the platform's stalls taken out.
+  Nanos max_own_execution = 0;
 };
 
 // What one wait returned.
@@ -55,6 +68,10 @@ class PeriodicLoop {
   // overrun whose body used less than a period of CPU is the platform's (preempted or a late
   // wake-up), never an execution overrun.
   std::uint64_t finish(Nanos cpu_time);
+  // The same, with the largest gap between two clock reads of the body (`stall`, 0 when not
+  // measured): an overrun whose body, without a gap of at least kStallGap, fits in a period
+  // is a stall of the platform. cpu_time < 0: not measured.
+  std::uint64_t finish(Nanos cpu_time, Nanos stall);
 
   Nanos period() const { return period_; }
   Nanos nextDeadline() const { return deadline_; }

@@ -35,6 +35,16 @@ class LatencyHistogram {
   double percentileUs(double p) const;
   TimingSummary summary() const;
   std::uint32_t boundUs() const { return bound_us_; }
+  // f(us, count) for every non-empty bin in increasing order (bin us: [us, us + 1) us); the
+  // samples at or beyond the bound are summary().overflow. A walk over all bins: not for a
+  // real-time thread.
+  template <class F>
+  void forEachBin(F&& f) const {
+    for (std::uint32_t i = 0; i < bound_us_; ++i) {
+      const std::uint64_t n = bins_[i].load(std::memory_order_relaxed);
+      if (n != 0) f(i, n);
+    }
+  }
 
  private:
   std::uint32_t bound_us_;

@@ -326,6 +326,31 @@ TEST_F(Staactl, StatusJsonPrintsTheStatusObject) {
   EXPECT_EQ(staad.requests()[0], "{\"cmd\":\"status\"}\n");
 }
 
+TEST_F(Staactl, HistogramsJsonPrintsTheHistogramsObject) {
+  const std::string histograms =
+      R"({"control":{"period_us":33333.3,"cycles":3,"wake_us":{"bins":[[12,2],[80,1]],"count":3,"overflow":0,)"
+      R"("bound_us":100000,"max_us":80.5},"exec_us":{"bins":[[19100,3]],"count":3,"overflow":0,"bound_us":100000,)"
+      R"("max_us":19100.9},"overruns":{"total":1,"ours":0,"late_wakeup":0,"preempted":0,"stall":1}}})";
+  FakeStaad staad(socket_, {"{\"ok\":true,\"histograms\":" + histograms + "}\n"});
+  const CtlRun r = ctl({"--socket", socket_.string(), "histograms", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Json::parse(r.out), Json::parse(histograms));
+  const CtlRun summary = ctl({"--socket", socket_.string(), "histograms"});
+  ASSERT_EQ(summary.exit_code, 0) << summary.err;
+  EXPECT_EQ(summary.out,
+            "control: 3 cycles; wake-up max 80 us, execution max 19101 us; overruns 0 ours, 0 late wake-ups, 0 preempted, "
+            "1 stalls\n");
+  ASSERT_EQ(staad.requests().size(), 2u);
+  EXPECT_EQ(staad.requests()[0], "{\"cmd\":\"histograms\"}\n");
+}
+
+TEST_F(Staactl, HistogramsFromAStaadWithoutThemIsAFailure) {
+  FakeStaad staad(socket_, {okReply()});
+  const CtlRun r = ctl({"--socket", socket_.string(), "histograms", "--json"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("without a \"histograms\" object"));
+}
+
 TEST_F(Staactl, StatusPrintsAHumanSummary) {
   Status s;
   s.state = DaemonState::kFault;

@@ -71,7 +71,7 @@ def main(argv):
         print(f"run-suite: {e}", file=sys.stderr)
         return 2
     except Exception as e:  # a tier that could not run at all: not a gate's verdict
-        if type(e).__name__ == "UsageError":
+        if type(e).__name__ in ("UsageError", "ToolError"):
             print(f"run-suite: {e}", file=sys.stderr)
             return 2
         raise

@@ -2,6 +2,7 @@
 //
 //   staactl [--socket PATH] goal X Y [TH] [--wait [--timeout S]] | stop | pose X Y [TH]
 //                           | status [--json] | wait [--timeout S] [--state STATE]
+//                           | histograms [--json]
 //
 // The socket is --socket, else $STAAD_SOCKET, else /run/staad/staad.sock. One request line
 // out, one reply line back (protocol.hpp), with a 2 s limit on the whole exchange: a daemon
@@ -50,6 +51,8 @@ constexpr int kExitTimeout = 3;
 constexpr const char* kDefaultSocket = "/run/staad/staad.sock";
 constexpr auto kReplyTimeout = std::chrono::seconds(2);
 constexpr std::size_t kMaxReplyBytes = 1u << 20;  // far above any status; guards against a runaway peer
+// Three threads' histograms of up to 100000 non-empty 1 us bins each, at ~12 bytes a bin.
+constexpr std::size_t kMaxHistogramsReplyBytes = 16u << 20;
 constexpr auto kWaitPoll = std::chrono::milliseconds(100);
 constexpr auto kWaitProgress = std::chrono::seconds(1);
 
@@ -97,13 +100,13 @@ Failure exchangeFailure(const staa::rt::SocketError& e, const std::string& path)
 
 // Sends one request and returns the reply object; a reply with "ok": false becomes a Failure
 // carrying staad's own error text.
-Json ask(const std::string& socket_path, const staa::staad::Request& request) {
+Json ask(const std::string& socket_path, const staa::staad::Request& request, std::size_t max_reply = kMaxReplyBytes) {
   std::string line;
   try {
     const auto timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(kReplyTimeout);
     staa::rt::UnixLineClient c(socket_path, timeout.count());
     c.send(staa::staad::requestLine(request));
-    line = c.receiveLine(kMaxReplyBytes);
+    line = c.receiveLine(max_reply);
   } catch (const staa::rt::SocketError& e) {
     throw exchangeFailure(e, socket_path);
   }
@@ -132,6 +135,16 @@ Json fetchStatus(const std::string& socket_path) {
     throw Failure("staad at " + socket_path + " replied to status without a \"status\" object");
   }
   return reply["status"];
+}
+
+Json fetchHistograms(const std::string& socket_path) {
+  staa::staad::Request request;
+  request.kind = staa::staad::RequestKind::kHistograms;
+  Json reply = ask(socket_path, request, kMaxHistogramsReplyBytes);
+  if (!reply.contains("histograms") || !reply["histograms"].is_object()) {
+    throw Failure("staad at " + socket_path + " replied to histograms without a \"histograms\" object (an older staad?)");
+  }
+  return reply["histograms"];
 }
 
 // ---- reading the status leniently: a field missing or of another type prints as "?" ----
@@ -195,6 +208,19 @@ void printSummary(const Json& s) {
   const Json& staleness = sub(s, "staleness");
   out << "staleness       odometry " << age(staleness, "odometry_s") << ", obstacles " << age(staleness, "obstacles_s") << "\n";
   out << "rt_allocations  " << num(s, "rt_allocations", 0) << "\n";
+  std::cout << out.str() << std::flush;
+}
+
+// One line per thread: its cycles, the wake-up and execution maxima, the overruns by cause.
+void printHistograms(const Json& h) {
+  std::ostringstream out;
+  for (const auto& [name, t] : h.items()) {
+    const Json& o = sub(t, "overruns");
+    out << name << ": " << num(t, "cycles", 0) << " cycles; wake-up max " << num(sub(t, "wake_us"), "max_us", 0)
+        << " us, execution max " << num(sub(t, "exec_us"), "max_us", 0) << " us; overruns " << num(o, "ours", 0)
+        << " ours, " << num(o, "late_wakeup", 0) << " late wake-ups, " << num(o, "preempted", 0) << " preempted, "
+        << num(o, "stall", 0) << " stalls\n";
+  }
   std::cout << out.str() << std::flush;
 }
 
@@ -380,6 +406,10 @@ int run(int argc, char** argv) {
   CLI::App* status = app.add_subcommand("status", "print the daemon's state, pose, timing and faults");
   bool json = false;
   status->add_flag("--json", json, "print the status object as JSON");
+  CLI::App* histograms =
+      app.add_subcommand("histograms", "print each periodic thread's wake-up and execution histograms (1 us bins)");
+  bool histograms_json = false;
+  histograms->add_flag("--json", histograms_json, "print the histograms object as JSON (sparse bins [[us, count], ...])");
   CLI::App* wait = app.add_subcommand("wait", "wait until the goal is reached (exit 0), unreachable (1) or the timeout (3)");
   std::string timeout_text = "120";
   std::string wanted = "reached";
@@ -402,7 +432,7 @@ int run(int argc, char** argv) {
         if (arg == "--socket") {
           ++i;
         } else if (!arg.empty() && arg.front() != '-') {
-          std::cerr << "staactl: unknown command " << inQuotes(arg) << " (expected goal, pose, stop, status or wait; try --help)\n";
+          std::cerr << "staactl: unknown command " << inQuotes(arg) << " (expected goal, pose, stop, status, histograms or wait; try --help)\n";
           return kExitBadInput;
         }
       }
@@ -450,6 +480,14 @@ int run(int argc, char** argv) {
       std::cout << s.dump(2, ' ', false, Json::error_handler_t::replace) << std::endl;
     } else {
       printSummary(s);
+    }
+    return kExitOk;
+  } else if (histograms->parsed()) {
+    const Json h = fetchHistograms(socket_path);
+    if (histograms_json) {
+      std::cout << h.dump(-1, ' ', false, Json::error_handler_t::replace) << std::endl;
+    } else {
+      printHistograms(h);
     }
     return kExitOk;
   } else if (wait->parsed()) {

@@ -42,6 +42,8 @@ constexpr long long kMaxHeapPrefaultMb = 4096;
 // The prefault touches the calling (main) thread's stack: it must stay well inside the
 // default 8 MiB stack limit, or the prefault itself overflows the stack.
 constexpr long long kMaxStackPrefaultKb = 4096;
+// debug.extra_cycle_us: up to a second of busy-waiting per cycle (far beyond any period).
+constexpr long long kMaxExtraCycleUs = 1'000'000;
 // sockaddr_un::sun_path holds 108 bytes including the terminating NUL.
 constexpr std::size_t kMaxSocketPathBytes = 107;
 
@@ -428,8 +430,17 @@ void readRos(const ConfigValue& root, DaemonConfig& config) {
 }
 
 void readDebug(const ConfigValue& root, DaemonConfig& config) {
-  const ConfigValue debug = root.section("debug", {"faults"});
+  const ConfigValue debug = root.section("debug", {"faults", "extra_cycle_us"});
   if (const ConfigValue n = debug.get("faults"); n.given()) config.debug_faults = n.boolean();
+  if (const ConfigValue n = debug.get("extra_cycle_us"); n.given()) {
+    const long long us = n.integer(0, kMaxExtraCycleUs, " (us the control cycle busy-waits each cycle)");
+    // A fault cue like the socket's debug requests: never in a robot's config by accident.
+    if (us != 0 && !config.debug_faults) {
+      n.fail("a fault cue for tests, taken only with debug.faults: true, got " + std::to_string(us) +
+             " with debug.faults false");
+    }
+    config.debug_extra_cycle_us = static_cast<std::uint32_t>(us);
+  }
 }
 
 void readThreads(const ConfigValue& root, DaemonConfig& config) {

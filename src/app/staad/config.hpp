@@ -34,6 +34,8 @@
 //   telemetry: {path: "", records: 4096, svg: ""}  # empty path: off; svg: the run's picture
 //   memory: {heap_prefault_mb: 64, stack_prefault_kb: 256}
 //   debug: {faults: false}                   # true: the socket's fault-injection requests (tests)
+//   debug: {faults: true, extra_cycle_us: 0}  # 0..1000000: the control cycle busy-waits that long
+//                                            # each cycle (tests: a slower cycle; needs faults)
 //   ros:                                     # the ROS link (docs/ros.md; HSR ROS 1 defaults)
 //     master_uri: ""                         # empty: $ROS_MASTER_URI
 //     node_name: staad
@@ -161,6 +163,7 @@ struct DaemonConfig {
   std::size_t stack_prefault_bytes = 256u << 10;
   ControlConfig control;  // rate_hz = control_hz; goal tolerances from `goal`
   bool debug_faults = false;  // the control socket takes {"debug": ...} fault injections
+  std::uint32_t debug_extra_cycle_us = 0;  // debug.extra_cycle_us (only with debug_faults)
 };
 
 // Parses the YAML text; `source` names it in errors and anchors relative paths. `hal`, when

@@ -17,9 +17,12 @@ ControlConfig controlConfigOf(const DaemonConfig& config) {
   return c;
 }
 
+// The monotonic clock is read through the control thread's stall probe.
+bool probedClock(const rt::Clock& clock) { return clock.nowFunction() == &rt::monotonicNow; }
+
 PlannerBudget budgetOf(const DaemonConfig& config, const rt::Clock& clock) {
   if (config.budget.isExpansions()) return config.budget.make();  // reads no clock
-  const rt::Clock::NowFunction now = clock.nowFunction();
+  const rt::Clock::NowFunction now = probedClock(clock) ? &rt::StallProbe::now : clock.nowFunction();
   if (now == nullptr) {
     throw std::invalid_argument(
         "ControlTask: a wall-clock budget (budget.ms) needs a clock the planner can read (the monotonic clock), "
@@ -96,7 +99,10 @@ ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, rt::Clo
       period_(secondsToNanos(1.0 / config.control_hz)),
       odometry_timeout_(secondsToNanos(config.odometry_timeout_s)),
       obstacles_timeout_(secondsToNanos(config.obstacles_timeout_s)),
+      probed_(probedClock(clock)),
+      extra_cycle_(static_cast<rt::Nanos>(config.debug_extra_cycle_us) * 1000),
       budget_(budgetOf(config, clock)),
+      budget_ms_(config.budget.isExpansions() ? 0.0 : config.budget.ms),
       limits_(config.robot.limits),
       own_cycle_(config.map, config.robot, controlConfigOf(config)),
       cycle_(&own_cycle_),
@@ -164,6 +170,7 @@ void ControlTask::takeRequests(rt::Nanos now) {
         if (!ch_.poses.push(request.pose)) log(now, rt::LogLevel::kWarning, "pose request dropped: the base thread's ring is full");
         break;
       case RequestKind::kStatus:  // answered by the service thread itself
+      case RequestKind::kHistograms:
       case RequestKind::kDebug: break;  // carried out through Channels' debug atomics
     }
   }
@@ -175,8 +182,15 @@ void ControlTask::forcedOverrun(rt::Nanos now) {
   const std::uint32_t ms = ch_.debug_overrun_ms.exchange(0, std::memory_order_acq_rel);
   if (ms == 0) return;
   log(now, rt::LogLevel::kWarning, "debug: forced overrun, busy-waiting (ms)", static_cast<double>(ms), 0.0, 0.0, 1);
-  const rt::Nanos until = clock_.now() + static_cast<rt::Nanos>(ms) * rt::kNanosPerMilli;
-  while (clock_.now() < until) {
+  busyWait(static_cast<rt::Nanos>(ms) * rt::kNanosPerMilli);
+}
+
+// Through the stall probe: a busy-wait's time is the cycle's own work, never a stall.
+rt::Nanos ControlTask::readClock() const { return probed_ ? rt::StallProbe::now() : clock_.now(); }
+
+void ControlTask::busyWait(rt::Nanos duration) {
+  const rt::Nanos until = readClock() + duration;
+  while (readClock() < until) {
   }
 }
 
@@ -242,10 +256,12 @@ void ControlTask::setState(rt::Nanos now, DaemonState state, FaultKind fault) {
 }
 
 void ControlTask::step(rt::Nanos now) {
+  if (probed_) rt::StallProbe::local().begin(now);
   flushTelemetry();  // the previous cycle's record, now that its overrun is known
   takeMap(now);
   takeRequests(now);
   forcedOverrun(now);
+  if (extra_cycle_ > 0) busyWait(extra_cycle_);  // debug.extra_cycle_us: a slower cycle
   takeInputs();
   const FaultKind fault = judgeInputs(now);
 
@@ -266,6 +282,8 @@ void ControlTask::step(rt::Nanos now) {
     in.robot = UnicycleState{odo.pose.x, odo.pose.y, odo.pose.theta, odo.v, odo.w};
     in.obstacles = &obstacles_;
     out = cycle_->step(in, budget_);
+    path_max_ = std::max<rt::Nanos>(path_max_, out.path_ns);
+    local_max_ = std::max<rt::Nanos>(local_max_, out.local_ns);
     setState(now, fromCycleState(out.state), fault);
     publishCommand(now, &out);
   }
@@ -292,6 +310,7 @@ void ControlTask::step(rt::Nanos now) {
     has_pending_ = true;
   }
   ch_.heartbeat.store(cycles_, std::memory_order_release);
+  if (probed_) last_stall_ = rt::StallProbe::local().end(rt::StallProbe::now());
 }
 
 // 5. The command for the next period, and the one after it (the base thread's fallback).
@@ -351,6 +370,9 @@ void ControlTask::publishStatus(rt::Nanos now) {
   s.obstacles_age_s = ageSeconds(now, obstacles_stamp_);
   s.expansions = last_output_.planned ? last_output_.plan.stats.pops : 0u;
   s.depth = last_output_.planned ? static_cast<double>(last_output_.plan.depth) : 0.0;
+  s.budget_ms = budget_ms_;
+  s.path_max_ns = path_max_;
+  s.local_max_ns = local_max_;
   s.time_s = static_cast<double>(now) * 1e-9;
   last_status_ = s;
   ch_.status.publish();

@@ -6,7 +6,7 @@
 // step(now), top to bottom:
 //   0. a new map (from ROS) swapped in: the cycle built on it replaces the current one;
 //   1. requests from the service thread: goal, stop, pose (forwarded to the base thread);
-//      a forced overrun (debug.faults, tests) busy-waits here;
+//      a forced overrun and debug.extra_cycle_us (debug.faults, tests) busy-wait here;
 //   2. the latest odometry + base status, and the latest obstacle frame;
 //   3. the inputs judged: a base fault, stale odometry, stale obstacles -> brake and report
 //      (a base fault first: it explains the silence that follows it, e.g. bus-off);
@@ -18,6 +18,10 @@
 //   7. a telemetry record (always: the service thread writes the CSV file and/or keeps the
 //      poses for the run's SVG picture), and log records on state changes and faults.
 // No allocation, no lock, no I/O: everything is sized by the constructor.
+//
+// On the monotonic clock the cycle reads its clock through the thread's stall probe
+// (rt/stall_probe.hpp): the planner's budget at every pop, the busy-waits every turn. The
+// largest gap between two reads is time the thread did not run (lastStall()).
 
 #include "app/staad/channels.hpp"
 #include "app/staad/config.hpp"
@@ -27,6 +31,7 @@
 #include "rt/activity.hpp"
 #include "rt/clock.hpp"
 #include "rt/periodic.hpp"
+#include "rt/stall_probe.hpp"
 
 #include <array>
 #include <cstdint>
@@ -35,7 +40,8 @@ namespace staa::staad {
 
 class ControlTask final : public rt::Runnable {
  public:
-  // `clock` is the daemon's: a forced overrun busy-waits on it, and a wall-clock budget
+  // `clock` is the daemon's: a forced overrun busy-waits on it (through the stall probe when
+  // it is the monotonic clock), and a wall-clock budget
   // (config budget.ms) is read from it (its nowFunction(): a test's manual clock has none,
   // so with it the budget must be budget.expansions, else std::invalid_argument). With
   // budget.expansions the run is reproducible and the planner reads no clock.
@@ -50,6 +56,8 @@ class ControlTask final : public rt::Runnable {
   void step(rt::Nanos now) override;
   // The last cycle's telemetry record (each cycle pushes its predecessor's).
   void stop(rt::Nanos) override { flushTelemetry(); }
+  // The largest gap between two clock reads of the last cycle (0 off the monotonic clock).
+  rt::Nanos lastStall() const override { return last_stall_; }
 
   // Pushes the last cycle's telemetry record.
   void flushTelemetry();
@@ -76,6 +84,8 @@ class ControlTask final : public rt::Runnable {
   void publishPlan(rt::Nanos now, const CycleOutput& out);
   void takeRequests(rt::Nanos now);
   void forcedOverrun(rt::Nanos now);
+  void busyWait(rt::Nanos duration);
+  rt::Nanos readClock() const;
   void takeInputs();
   FaultKind judgeInputs(rt::Nanos now) const;
   void setState(rt::Nanos now, DaemonState state, FaultKind fault);
@@ -89,7 +99,13 @@ class ControlTask final : public rt::Runnable {
   rt::Nanos period_;
   rt::Nanos odometry_timeout_;
   rt::Nanos obstacles_timeout_;
+  bool probed_;                // the clock is read through the thread's stall probe
+  rt::Nanos last_stall_ = 0;
+  rt::Nanos extra_cycle_;      // debug.extra_cycle_us: busy-waited every cycle
   PlannerBudget budget_;
+  double budget_ms_;           // the wall-clock budget, 0 with an expansion budget
+  rt::Nanos path_max_ = 0;     // the longest path and local-map steps so far
+  rt::Nanos local_max_ = 0;
   MotionLimits limits_;
 
   ControlCycle own_cycle_;      // on the config's map

@@ -279,15 +279,15 @@ void Daemon::reportTiming(const rt::PeriodicActivity* activity) {
   const rt::PeriodicCounters& c = t.counters;
   const rt::TimingSummary& e = t.execution;
   const rt::TimingSummary& k = t.wake;
-  char line[320];
+  char line[384];
   std::snprintf(line, sizeof line,
                 "[%s] %llu cycles; execution p50 %.0f us, p99 %.0f us, max %.0f us; wake-up p99 %.0f us, max %.0f us; "
-                "%llu overruns (%llu execution, %llu late wake-ups, %llu preempted), %llu periods skipped",
+                "%llu overruns (%llu execution, %llu late wake-ups, %llu preempted, %llu stalls), %llu periods skipped",
                 activity->name().c_str(), static_cast<unsigned long long>(c.cycles), e.p50_us, e.p99_us, e.max_us,
                 k.p99_us, k.max_us,
                 static_cast<unsigned long long>(c.overruns), static_cast<unsigned long long>(c.execution_overruns),
                 static_cast<unsigned long long>(c.late_wakeups), static_cast<unsigned long long>(c.preempted),
-                static_cast<unsigned long long>(c.skipped_periods));
+                static_cast<unsigned long long>(c.stalls), static_cast<unsigned long long>(c.skipped_periods));
   say(line);
 }
 
@@ -342,7 +342,8 @@ int Daemon::run() {
   startThreads();
   rt::resetRealtimeAllocations();
   service_->watchTiming(control_.get(), base_->started() ? base_.get() : nullptr,
-                        base_->started() ? base_task_.get() : nullptr);
+                        base_->started() ? base_task_.get() : nullptr,
+                        perception_ && perception_->started() ? perception_.get() : nullptr);
   service_->ready(clock_.now());
   {
     std::string hal(toString(config_.hal));

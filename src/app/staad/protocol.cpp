@@ -71,7 +71,7 @@ const char* kindName(const Json& v) {
   }
 }
 
-constexpr const char* kCommands = "goal, pose, stop or status";
+constexpr const char* kCommands = "goal, pose, stop, status or histograms";
 
 // A second, reporting-only pass over a line that nlohmann refused with out_of_range (a
 // number beyond a double, such as 1e999): the DOM parser does not say which key held it.
@@ -106,7 +106,8 @@ class OverflowLocator final : public nlohmann::json_sax<Json> {
 };
 
 std::optional<RequestKind> commandKind(const std::string& cmd) {
-  for (const RequestKind k : {RequestKind::kGoal, RequestKind::kPose, RequestKind::kStop, RequestKind::kStatus}) {
+  for (const RequestKind k :
+       {RequestKind::kGoal, RequestKind::kPose, RequestKind::kStop, RequestKind::kStatus, RequestKind::kHistograms}) {
     if (cmd == toString(k)) return k;
   }
   return std::nullopt;
@@ -282,6 +283,9 @@ void addThreadJson(Json& j, const rt::ActivityTiming& t, std::uint64_t count) {
   j["execution_overruns"] = t.counters.execution_overruns;
   j["late_wakeups"] = t.counters.late_wakeups;
   j["preempted"] = t.counters.preempted;
+  j["stalls"] = t.counters.stalls;
+  // The longest cycle less its measured stall: the cycle's own work at its longest.
+  j["own_execution_max_us"] = static_cast<double>(t.counters.max_own_execution) * 1e-3;
   j["skipped_periods"] = t.counters.skipped_periods;
   j["realtime"] = t.realtime;
 }
@@ -365,10 +369,51 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
   // Never seen is null, not -1: a script comparing ages against a limit must not read -1 as fresh.
   auto age = [](double s) { return s < 0.0 ? Json(nullptr) : Json(s); };
   j["staleness"] = {{"odometry_s", age(status.odometry_age_s)}, {"obstacles_s", age(status.obstacles_age_s)}};
-  j["planner"] = {{"expansions", status.expansions}, {"depth", status.depth}};
+  // budget_ms null: an expansion budget. path_max_us / local_max_us: the longest path and
+  // local-map steps so far (a cycle's work ends by the budget plus those).
+  j["planner"] = {{"expansions", status.expansions},
+                  {"depth", status.depth},
+                  {"budget_ms", status.budget_ms > 0.0 ? Json(status.budget_ms) : Json(nullptr)},
+                  {"path_max_us", static_cast<double>(status.path_max_ns) * 1e-3},
+                  {"local_max_us", static_cast<double>(status.local_max_ns) * 1e-3}};
   j["time_s"] = status.time_s;
   j["ros"] = rosJson(status.ros);
   return j;
+}
+
+nlohmann::json histogramJson(const rt::LatencyHistogram& h) {
+  Json bins = Json::array();
+  h.forEachBin([&bins](std::uint32_t us, std::uint64_t count) { bins.push_back({us, count}); });
+  const rt::TimingSummary s = h.summary();
+  return {{"bins", std::move(bins)}, {"count", s.count}, {"overflow", s.overflow}, {"bound_us", h.boundUs()},
+          {"max_us", s.max_us}};
+}
+
+nlohmann::json histogramsJson(std::span<const ThreadHistograms> threads) {
+  Json j = Json::object();
+  for (const ThreadHistograms& t : threads) {
+    if (t.activity == nullptr || !t.activity->started()) continue;
+    const rt::PeriodicCounters c = t.activity->counters();
+    j[t.name] = {{"period_us", static_cast<double>(t.activity->period()) * 1e-3},
+                 {"cycles", c.cycles},
+                 {"wake_us", histogramJson(t.activity->wakeLatency())},
+                 {"exec_us", histogramJson(t.activity->execution())},
+                 {"overruns", {{"total", c.overruns},
+                               {"ours", c.execution_overruns},
+                               {"late_wakeup", c.late_wakeups},
+                               {"preempted", c.preempted},
+                               {"stall", c.stalls}}},
+                 {"own_execution_max_us", static_cast<double>(c.max_own_execution) * 1e-3},
+                 {"realtime", t.activity->realtime()}};
+  }
+  return j;
+}
+
+std::string histogramsReply(std::span<const ThreadHistograms> threads) {
+  Json j;
+  j["ok"] = true;
+  j["histograms"] = histogramsJson(threads);
+  return dumpSafe(j) + "\n";
 }
 
 std::string okReply() { return "{\"ok\":true}\n"; }

@@ -6,6 +6,9 @@
 //   {"cmd": "pose", "x": 1.0, "y": 1.0, "theta": 0.0}   -> {"ok": true}   (set / correct the pose)
 //   {"cmd": "stop"}                                     -> {"ok": true}   (brake, drop the goal)
 //   {"cmd": "status"}                                   -> {"ok": true, "status": {...}}
+//   {"cmd": "histograms"}                               -> {"ok": true, "histograms": {...}}
+//                                                          (each periodic thread's wake-up and
+//                                                          execution histograms, sparse bins)
 //   {"debug": "overrun", "ms": 80}                      -> {"ok": true}   (tests: the next control
 //   {"debug": "stall_obstacles", "on": true}            -> {"ok": true}    cycle busy-waits / obstacle
 //                                                                          frames stop; only with
@@ -20,8 +23,11 @@
 
 #include "app/staad/status.hpp"
 
+#include "rt/activity.hpp"
+
 #include <cstddef>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -40,6 +46,24 @@ std::string requestLine(const Request& request);  // the line staactl sends (wit
 // p99_us, max_us, overruns, count}, rt_allocations, plus goal_id and queued_goal_id, wake-up
 // latency, staleness and the planner's last call.
 nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations);
+
+// A periodic thread whose histograms a histograms request reports (null or not started:
+// left out).
+struct ThreadHistograms {
+  const char* name;  // "control", "base", "perception"
+  const rt::PeriodicActivity* activity;
+};
+
+// The `histograms` object (docs/ARCHITECTURE.md section 6): per thread, period_us, cycles,
+// wake_us and exec_us {bins: [[us, count], ...] (non-empty 1 us bins), count, overflow,
+// bound_us, max_us}, overruns {total, ours, late_wakeup, preempted, stall},
+// own_execution_max_us, realtime. The bins are read from the threads' histograms (relaxed
+// atomics: a few samples behind at most, never torn); the threads never wait for it.
+nlohmann::json histogramsJson(std::span<const ThreadHistograms> threads);
+// One histogram: {bins: [[us, count], ...] (bin us holds [us, us + 1) us), count, overflow
+// (samples at or beyond bound_us), bound_us, max_us (exact)}.
+nlohmann::json histogramJson(const rt::LatencyHistogram& histogram);
+std::string histogramsReply(std::span<const ThreadHistograms> threads);
 
 std::string okReply();                             // {"ok":true}\n
 std::string goalReply(std::uint64_t goal_id);      // {"ok":true,"goal_id":N}\n

@@ -83,10 +83,11 @@ void Service::openSocket() {
 }
 
 void Service::watchTiming(const rt::PeriodicActivity* control, const rt::PeriodicActivity* base,
-                          const BaseTask* base_task) {
+                          const BaseTask* base_task, const rt::PeriodicActivity* perception) {
   control_activity_ = control;
   base_activity_ = base;
   base_task_ = base_task;
+  perception_activity_ = perception;
 }
 
 const Status& Service::latest() {
@@ -243,6 +244,12 @@ void Service::handleLine(Client& c, std::string_view line) {
   const Request& request = std::get<Request>(parsed);
   if (request.kind == RequestKind::kStatus) {
     c.out.append(statusReply(status(), rt::realtimeAllocations()));
+    return;
+  }
+  if (request.kind == RequestKind::kHistograms) {
+    const ThreadHistograms threads[] = {
+        {"control", control_activity_}, {"base", base_activity_}, {"perception", perception_activity_}};
+    c.out.append(histogramsReply(threads));
     return;
   }
   if (request.kind == RequestKind::kDebug) {

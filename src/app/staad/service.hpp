@@ -8,7 +8,7 @@
 // client has its own line buffer of at most kMaxRequestBytes; a longer line gets an error
 // reply and is discarded up to its newline, the client stays connected. Goal, stop and pose
 // requests go to the control thread through the request ring; status is answered here from
-// the latest Status snapshot. Goals are numbered here (1, 2, ...) as they are queued. Debug
+// the latest Status snapshot, histograms from the periodic threads' histograms. Goals are numbered here (1, 2, ...) as they are queued. Debug
 // requests (tests' fault injection, only with debug.faults) set Channels' debug atomics.
 //
 // With an SVG path (`--svg`, telemetry.svg) the service keeps the run as it goes (the poses of
@@ -71,8 +71,10 @@ class Service {
 
   // The activities whose timing completes the status: the control thread's (the contract's
   // `cycle`) and the base thread's (`threads.base`), with the base task's command-to-wire
-  // latency (`base.command_to_wire`). Read through their atomics; null: left empty.
-  void watchTiming(const rt::PeriodicActivity* control, const rt::PeriodicActivity* base, const BaseTask* base_task);
+  // latency (`base.command_to_wire`). Read through their atomics; null: left empty. The
+  // histograms request reports these and the perception thread's histograms.
+  void watchTiming(const rt::PeriodicActivity* control, const rt::PeriodicActivity* base, const BaseTask* base_task,
+                   const rt::PeriodicActivity* perception = nullptr);
 
   // Fields of the status that another part of the daemon owns (the ROS link), filled in by
   // `complete` whenever status() is asked for.
@@ -149,6 +151,7 @@ class Service {
   Status status_;
   const rt::PeriodicActivity* control_activity_ = nullptr;
   const rt::PeriodicActivity* base_activity_ = nullptr;
+  const rt::PeriodicActivity* perception_activity_ = nullptr;
   const BaseTask* base_task_ = nullptr;
   bool ready_ = false;
   bool terminate_ = false;

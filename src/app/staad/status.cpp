@@ -34,6 +34,7 @@ const char* toString(RequestKind kind) {
     case RequestKind::kPose: return "pose";
     case RequestKind::kStatus: return "status";
     case RequestKind::kDebug: return "debug";
+    case RequestKind::kHistograms: return "histograms";
   }
   return "unknown";
 }

@@ -78,6 +78,12 @@ struct Status {
   // The planner's last call.
   std::uint32_t expansions = 0;
   double depth = 0.0;
+  // The planner's wall-clock budget per cycle (0 with an expansion budget), and the longest
+  // path and local-map steps of a cycle so far: a cycle's own work ends by the budget plus
+  // those (the path step may run into its last query, the local map reads no deadline).
+  double budget_ms = 0.0;
+  std::int64_t path_max_ns = 0;
+  std::int64_t local_max_ns = 0;
   double time_s = 0.0;    // monotonic time of the snapshot
   // Set by the service thread, not the control thread: the id of the newest goal it queued
   // (0: none yet). It runs ahead of goal_id until the control thread takes that goal (within
@@ -87,8 +93,8 @@ struct Status {
   RosLinkStatus ros;
 };
 
-enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus, kDebug };
-const char* toString(RequestKind kind);  // "goal", "stop", "pose", "status", "debug"
+enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus, kDebug, kHistograms };
+const char* toString(RequestKind kind);  // "goal", "stop", "pose", "status", "debug", "histograms"
 
 // Fault injection for tests ({"debug": ...}; only with debug.faults: true in the config).
 enum class DebugKind : std::uint8_t {

@@ -88,7 +88,7 @@ TEST(Protocol, MalformedRequestsAreRejectedWithTheFieldAndValue) {
       {"42", {"expected a JSON object", "a number"}},
       {R"("goal")", {"expected a JSON object", "a string"}},
       {R"({"cmd":5})", {"\"cmd\"", "expected a string", "got 5"}},
-      {R"({"cmd":"fly"})", {"\"cmd\"", "unknown command \"fly\"", "goal, pose, stop or status"}},
+      {R"({"cmd":"fly"})", {"\"cmd\"", "unknown command \"fly\"", "goal, pose, stop, status or histograms"}},
       {R"({"x":1,"y":2})", {"\"cmd\": missing"}},
       {R"({"cmd":"goal","x":1})", {"\"y\": missing", "goal needs x and y"}},
       {R"({"cmd":"pose","y":1})", {"\"x\": missing", "pose"}},
@@ -374,6 +374,58 @@ TEST(Protocol, NamesOfEnumsAreTheContractSpellings) {
   EXPECT_STREQ(toString(DebugKind::kOverrun), "overrun");
   EXPECT_STREQ(toString(DebugKind::kStallObstacles), "stall_obstacles");
   EXPECT_STREQ(toString(static_cast<DaemonState>(200)), "unknown");
+}
+
+TEST(Protocol, HistogramsIsACommandWithoutParameters) {
+  EXPECT_EQ(parsedOk(R"({"cmd": "histograms"})").kind, RequestKind::kHistograms);
+  EXPECT_EQ(requestLine(Request{RequestKind::kHistograms, {}}), "{\"cmd\":\"histograms\"}\n");
+  EXPECT_THAT(parsedError(R"({"cmd": "histograms", "thread": "control"})"),
+              HasSubstr("unknown key \"thread\" for histograms (expected cmd only)"));
+  EXPECT_STREQ(toString(RequestKind::kHistograms), "histograms");
+}
+
+TEST(Protocol, AHistogramIsItsNonEmptyBinsWithCountOverflowAndMax) {
+  rt::LatencyHistogram h(100);  // 1 us bins up to 100 us
+  h.record(1'500);              // bin 1
+  h.record(1'999);              // bin 1
+  h.record(42'000);             // bin 42
+  h.record(250'000);            // beyond the bound: overflow, the exact max
+  const Json j = histogramJson(h);
+  EXPECT_EQ(j["bins"], Json::parse("[[1, 2], [42, 1]]"));
+  EXPECT_EQ(j["count"], 4);
+  EXPECT_EQ(j["overflow"], 1);
+  EXPECT_EQ(j["bound_us"], 100);
+  EXPECT_DOUBLE_EQ(j["max_us"].get<double>(), 250.0);
+  EXPECT_EQ(histogramJson(rt::LatencyHistogram(10))["bins"], Json::array());
+}
+
+TEST(Protocol, HistogramsLeaveOutThreadsThatDoNotRun) {
+  const ThreadHistograms none[] = {{"control", nullptr}, {"base", nullptr}};
+  EXPECT_EQ(histogramsJson(none), Json::object());
+  const Json reply = Json::parse(histogramsReply(none));
+  EXPECT_EQ(reply["ok"], true);
+  EXPECT_EQ(reply["histograms"], Json::object());
+}
+
+TEST(Protocol, StatusNamesStallsAndThePlannersBoundBesideTheOtherCauses) {
+  Status s;
+  s.control_thread.counters.stalls = 3;
+  s.control_thread.counters.preempted = 2;
+  s.control_thread.counters.max_own_execution = 19'500'000;
+  s.base_thread.counters.stalls = 1;
+  s.budget_ms = 19.0;
+  s.path_max_ns = 1'250'000;
+  s.local_max_ns = 300'000;
+  const Json j = statusJson(s, 0);
+  EXPECT_EQ(j["stalls"], 3);
+  EXPECT_EQ(j["preempted"], 2);
+  EXPECT_DOUBLE_EQ(j["own_execution_max_us"].get<double>(), 19'500.0);
+  EXPECT_EQ(j["threads"]["base"]["stalls"], 1);
+  EXPECT_DOUBLE_EQ(j["planner"]["budget_ms"].get<double>(), 19.0);
+  EXPECT_DOUBLE_EQ(j["planner"]["path_max_us"].get<double>(), 1'250.0);
+  EXPECT_DOUBLE_EQ(j["planner"]["local_max_us"].get<double>(), 300.0);
+  s.budget_ms = 0.0;  // an expansion budget
+  EXPECT_TRUE(statusJson(s, 0)["planner"]["budget_ms"].is_null());
 }
 
 }  // namespace

@@ -584,6 +584,38 @@ TEST_F(ConfigFiles, DebugFaultsAreOffUnlessAsked) {
   EXPECT_FALSE(loadDaemonConfig(write("off.yaml", edited("hal: sim", "hal: sim\ndebug: {faults: false}"))).debug_faults);
 }
 
+TEST_F(ConfigFiles, ExtraCycleTimeIsAFaultCueTakenOnlyWithDebugFaults) {
+  EXPECT_EQ(loadDaemonConfig(write("staad.yaml", kValid)).debug_extra_cycle_us, 0u);
+  const DaemonConfig on =
+      loadDaemonConfig(write("on.yaml", edited("hal: sim", "hal: sim\ndebug: {faults: true, extra_cycle_us: 20000}")));
+  EXPECT_TRUE(on.debug_faults);
+  EXPECT_EQ(on.debug_extra_cycle_us, 20000u);
+  EXPECT_EQ(loadDaemonConfig(write("max.yaml", edited("hal: sim", "hal: sim\ndebug: {extra_cycle_us: 1000000, faults: true}")))
+                .debug_extra_cycle_us,
+            1'000'000u);
+  // 0 is no fault: taken without debug.faults.
+  EXPECT_EQ(loadDaemonConfig(write("zero.yaml", edited("hal: sim", "hal: sim\ndebug: {extra_cycle_us: 0}"))).debug_extra_cycle_us,
+            0u);
+
+  const std::string off = loadError(edited("hal: sim", "hal: sim\ndebug: {extra_cycle_us: 20000}"));
+  EXPECT_THAT(off, HasSubstr("debug.extra_cycle_us"));
+  EXPECT_THAT(off, HasSubstr("debug.faults: true"));
+  EXPECT_THAT(off, HasSubstr("got 20000"));
+  const std::string off2 = loadError(edited("hal: sim", "hal: sim\ndebug: {faults: false, extra_cycle_us: 5}"));
+  EXPECT_THAT(off2, HasSubstr("debug.extra_cycle_us"));
+  EXPECT_THAT(off2, HasSubstr("got 5"));
+  const std::string big = loadError(edited("hal: sim", "hal: sim\ndebug: {faults: true, extra_cycle_us: 1000001}"));
+  EXPECT_THAT(big, HasSubstr("debug.extra_cycle_us"));
+  EXPECT_THAT(big, HasSubstr("0..1000000"));
+  EXPECT_THAT(big, HasSubstr("1000001"));
+  const std::string negative = loadError(edited("hal: sim", "hal: sim\ndebug: {faults: true, extra_cycle_us: -1}"));
+  EXPECT_THAT(negative, HasSubstr("debug.extra_cycle_us"));
+  EXPECT_THAT(negative, HasSubstr("-1"));
+  const std::string fraction = loadError(edited("hal: sim", "hal: sim\ndebug: {faults: true, extra_cycle_us: 2.5}"));
+  EXPECT_THAT(fraction, HasSubstr("debug.extra_cycle_us"));
+  EXPECT_THAT(fraction, HasSubstr("2.5"));
+}
+
 TEST_F(ConfigFiles, MissingConfigFileNamesThePath) {
   try {
     loadDaemonConfig(dir_ / "absent.yaml");
