@@ -138,17 +138,21 @@ bool Service::runOnce(rt::Nanos now, int timeout_ms) {
   for (const Client& c : clients_) poller_.watch(c.stream.fd(), true, !c.out.empty());
   const rt::Poller::Result polled = poller_.wait(timeout_ms);
   if (polled.error != 0) info("poll: " + rt::errnoText(polled.error));
+  const std::size_t watched = clients_.size();
   if (polled.ready > 0) {
     if (poller_.readable(signalled) && takeSignals()) terminate_ = true;
-    for (std::size_t i = 0; i < clients_.size(); ++i) {
+    if (poller_.readable(listening)) acceptClients(now);
+    // New connections first: an operator's stop must not wait behind a round of busy clients.
+    for (std::size_t i = watched; i < clients_.size(); ++i) readClient(clients_[i], now);
+    for (std::size_t i = 0; i < watched; ++i) {
       Client& c = clients_[i];
+      if (!c.stream.isOpen()) continue;  // dropped to make room
       if (poller_.readable(first_client + i) || poller_.hungUp(first_client + i)) readClient(c, now);
       if (c.stream.isOpen() && poller_.writable(first_client + i)) flushClient(c);
     }
   }
   dropIdleClients(now);
   std::erase_if(clients_, [](const Client& c) { return !c.stream.isOpen(); });
-  if (polled.ready > 0 && poller_.readable(listening)) acceptClients(now);
   latest();
   drainLogs();
   drainTelemetry();
@@ -180,7 +184,8 @@ void Service::acceptClients(rt::Nanos now) {
       if (error != 0) info("accept: " + rt::errnoText(error));
       return;
     }
-    if (clients_.size() >= options_.max_clients) makeRoom(now);
+    const auto open = std::count_if(clients_.begin(), clients_.end(), [](const Client& c) { return c.stream.isOpen(); });
+    if (static_cast<std::size_t>(open) >= options_.max_clients) makeRoom(now);
     Client c;
     c.stream = std::move(*stream);
     c.last_line = now;
@@ -188,15 +193,18 @@ void Service::acceptClients(rt::Nanos now) {
   }
 }
 
-// The newest connection is likely an operator's: the longest-idle client goes instead.
+// The newest connection is likely an operator's: the longest-idle client goes instead. It is
+// closed, not erased: the round's poll results are indexed by the clients' places.
 void Service::makeRoom(rt::Nanos now) {
-  auto longest = std::min_element(clients_.begin(), clients_.end(),
-                                  [](const Client& a, const Client& b) { return a.last_line < b.last_line; });
+  Client* longest = nullptr;
+  for (Client& c : clients_) {
+    if (c.stream.isOpen() && (longest == nullptr || c.last_line < longest->last_line)) longest = &c;
+  }
+  if (longest == nullptr) return;
   const std::string slots = std::to_string(options_.max_clients);
   dropClient(*longest, "all " + slots + " client slots (socket.max_clients) are taken: the longest idle, this one, is closed",
              "control socket: all " + slots + " client slots (socket.max_clients) taken: dropped the longest-idle client (" +
                  seconds(now - longest->last_line) + " since its last line) to make room");
-  clients_.erase(longest);
 }
 
 void Service::dropIdleClients(rt::Nanos now) {
