@@ -44,6 +44,10 @@ constexpr long long kMaxHeapPrefaultMb = 4096;
 constexpr long long kMaxStackPrefaultKb = 4096;
 // debug.extra_cycle_us: up to a second of busy-waiting per cycle (far beyond any period).
 constexpr long long kMaxExtraCycleUs = 1'000'000;
+// The service polls every client each round: a few hundred stay cheap.
+constexpr long long kMaxSocketClients = 256;
+constexpr double kMinIdleTimeoutS = 0.1;
+constexpr double kMaxIdleTimeoutS = 3600.0;
 // sockaddr_un::sun_path holds 108 bytes including the terminating NUL.
 constexpr std::size_t kMaxSocketPathBytes = 107;
 
@@ -477,7 +481,7 @@ std::optional<unsigned> permissionBits(const ConfigValue& m) {
 }
 
 void readSocket(const ConfigValue& root, DaemonConfig& config) {
-  const ConfigValue socket = root.section("socket", {"path", "mode"});
+  const ConfigValue socket = root.section("socket", {"path", "mode", "max_clients", "idle_timeout_s"});
   if (const ConfigValue p = socket.get("path"); p.given()) {
     config.socket_path = p.path().lexically_normal().string();
     if (config.socket_path.size() > kMaxSocketPathBytes) {
@@ -489,6 +493,14 @@ void readSocket(const ConfigValue& root, DaemonConfig& config) {
     const std::optional<unsigned> mode = permissionBits(m);
     if (!mode) m.fail("expected permission bits as an octal string like \"0660\" (0000..0777), got " + m.text());
     config.socket_mode = *mode;
+  }
+  if (const ConfigValue n = socket.get("max_clients"); n.given()) {
+    config.socket_max_clients = static_cast<std::size_t>(n.integer(1, kMaxSocketClients));
+  }
+  // Long enough for a person typing a request by hand (socat), short enough that silent
+  // connections cannot hold the slots for long.
+  if (const ConfigValue n = socket.get("idle_timeout_s"); n.given()) {
+    config.socket_idle_timeout_s = n.number(Range::closed(kMinIdleTimeoutS, kMaxIdleTimeoutS, "s"));
   }
 }
 

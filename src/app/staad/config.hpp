@@ -28,7 +28,7 @@
 //     control: {priority: 80, cpu: -1}
 //     base: {priority: 85, cpu: -1}
 //     perception: {priority: 70, cpu: -1}
-//   socket: {path: /run/staad/staad.sock, mode: "0660"}
+//   socket: {path: /run/staad/staad.sock, mode: "0660", max_clients: 16, idle_timeout_s: 5}
 //   limits: {odometry_timeout_s: 0.1, obstacles_timeout_s: 0.2}
 //   goal: {tolerance_m: 0.2, heading_tolerance: 0.4}
 //   telemetry: {path: "", records: 4096, svg: ""}  # empty path: off; svg: the run's picture
@@ -154,6 +154,10 @@ struct DaemonConfig {
   rt::ThreadSpec perception_thread{"staad-percept", 70, -1};
   std::string socket_path = "/run/staad/staad.sock";
   unsigned socket_mode = 0660;
+  // The control socket's clients at once (a new one makes room by dropping the longest idle),
+  // and how long a client may take to complete a request line before it is dropped.
+  std::size_t socket_max_clients = 16;
+  double socket_idle_timeout_s = 5.0;
   double odometry_timeout_s = 0.1;
   double obstacles_timeout_s = 0.2;
   std::filesystem::path telemetry_path;  // empty: off

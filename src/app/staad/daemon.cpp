@@ -171,6 +171,8 @@ void Daemon::createWorkspaces() {
   ServiceOptions so;
   so.socket_path = config_.socket_path;
   so.socket_mode = config_.socket_mode;
+  so.max_clients = config_.socket_max_clients;
+  so.idle_timeout = static_cast<rt::Nanos>(config_.socket_idle_timeout_s * static_cast<double>(rt::kNanosPerSecond));
   so.telemetry_path = config_.telemetry_path;
   so.svg_path = config_.svg_path;
   so.watchdog_interval = watchdog;

@@ -5,6 +5,7 @@
 #include "rt/alloc_count.hpp"
 #include "rt/errors.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ostream>
@@ -24,6 +25,12 @@ std::string quoted(const std::string& s) {
   return q;
 }
 
+std::string seconds(rt::Nanos t) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g s", static_cast<double>(t) / static_cast<double>(rt::kNanosPerSecond));
+  return text;
+}
+
 const char* levelName(rt::LogLevel level) {
   switch (level) {
     case rt::LogLevel::kInfo: return "info";
@@ -36,8 +43,8 @@ const char* levelName(rt::LogLevel level) {
 }  // namespace
 
 Service::Service(Channels& channels, const rt::Notifier& notifier, ServiceOptions options, std::ostream& log)
-    : ch_(channels), notifier_(notifier), options_(std::move(options)), log_(log), poller_(kMaxClients + 2) {
-  clients_.reserve(kMaxClients);
+    : ch_(channels), notifier_(notifier), options_(std::move(options)), log_(log), poller_(options_.max_clients + 2) {
+  clients_.reserve(options_.max_clients);
 }
 
 Service::~Service() { close(); }
@@ -72,7 +79,7 @@ void Service::open() {
 void Service::openSocket() {
   const std::string& path = options_.socket_path;
   try {
-    listener_.emplace(rt::UnixListener::open(path, options_.socket_mode, static_cast<int>(kMaxClients)));
+    listener_.emplace(rt::UnixListener::open(path, options_.socket_mode, static_cast<int>(options_.max_clients)));
   } catch (const rt::SocketError& e) {
     std::string message = "control socket ";
     message.append(quoted(path)).append(": ");
@@ -132,16 +139,21 @@ bool Service::runOnce(rt::Nanos now, int timeout_ms) {
   for (const Client& c : clients_) poller_.watch(c.stream.fd(), true, !c.out.empty());
   const rt::Poller::Result polled = poller_.wait(timeout_ms);
   if (polled.error != 0) info("poll: " + rt::errnoText(polled.error));
+  const std::size_t watched = clients_.size();
   if (polled.ready > 0) {
     if (poller_.readable(signalled) && takeSignals()) terminate_ = true;
-    for (std::size_t i = 0; i < clients_.size(); ++i) {
+    if (poller_.readable(listening)) acceptClients(now);
+    // New connections first: an operator's stop must not wait behind a round of busy clients.
+    for (std::size_t i = watched; i < clients_.size(); ++i) readClient(clients_[i], now);
+    for (std::size_t i = 0; i < watched; ++i) {
       Client& c = clients_[i];
-      if (poller_.readable(first_client + i) || poller_.hungUp(first_client + i)) readClient(c);
+      if (!c.stream.isOpen()) continue;  // dropped to make room
+      if (poller_.readable(first_client + i) || poller_.hungUp(first_client + i)) readClient(c, now);
       if (c.stream.isOpen() && poller_.writable(first_client + i)) flushClient(c);
     }
-    std::erase_if(clients_, [](const Client& c) { return !c.stream.isOpen(); });
-    if (poller_.readable(listening)) acceptClients();
   }
+  dropIdleClients(now);
+  std::erase_if(clients_, [](const Client& c) { return !c.stream.isOpen(); });
   latest();
   drainLogs();
   drainTelemetry();
@@ -165,7 +177,7 @@ bool Service::takeSignals() {
   return got;
 }
 
-void Service::acceptClients() {
+void Service::acceptClients(rt::Nanos now) {
   for (;;) {
     int error = 0;
     std::optional<rt::UnixStream> stream = listener_->accept(error);
@@ -173,17 +185,48 @@ void Service::acceptClients() {
       if (error != 0) info("accept: " + rt::errnoText(error));
       return;
     }
-    if (clients_.size() >= kMaxClients) {
-      (void)stream->send(errorReply("too many clients (at most 16)"));
-      continue;  // closed as `stream` goes
-    }
+    const auto open = std::count_if(clients_.begin(), clients_.end(), [](const Client& c) { return c.stream.isOpen(); });
+    if (static_cast<std::size_t>(open) >= options_.max_clients) makeRoom(now);
     Client c;
     c.stream = std::move(*stream);
+    c.last_line = now;
     clients_.push_back(std::move(c));
   }
 }
 
-void Service::readClient(Client& c) {
+// The newest connection is likely an operator's: the longest-idle client goes instead. It is
+// closed, not erased: the round's poll results are indexed by the clients' places.
+void Service::makeRoom(rt::Nanos now) {
+  Client* longest = nullptr;
+  for (Client& c : clients_) {
+    if (c.stream.isOpen() && (longest == nullptr || c.last_line < longest->last_line)) longest = &c;
+  }
+  if (longest == nullptr) return;
+  const std::string slots = std::to_string(options_.max_clients);
+  dropClient(*longest, "all " + slots + " client slots (socket.max_clients) are taken: the longest idle, this one, is closed",
+             "control socket: all " + slots + " client slots (socket.max_clients) taken: dropped the longest-idle client (" +
+                 seconds(now - longest->last_line) + " since its last line) to make room");
+}
+
+void Service::dropIdleClients(rt::Nanos now) {
+  for (Client& c : clients_) {
+    if (!c.stream.isOpen() || now - c.last_line < options_.idle_timeout) continue;
+    const std::string limit = seconds(options_.idle_timeout) + " (socket.idle_timeout_s)";
+    dropClient(c, "no complete request line within " + limit + ": closed",
+               "control socket: dropped a client with no complete line within " + limit +
+                   (c.in.empty() ? "" : ", " + std::to_string(c.in.size()) + " bytes of a line pending"));
+  }
+}
+
+// One best-effort error reply (the client may not read), then closed.
+void Service::dropClient(Client& c, const std::string& reply, const std::string& log_line) {
+  flushClient(c);
+  if (c.stream.isOpen() && c.out.empty()) (void)c.stream.send(errorReply(reply));
+  info(log_line);
+  closeClient(c);
+}
+
+void Service::readClient(Client& c, rt::Nanos now) {
   char buf[4096];
   for (int reads = 0; reads < kMaxReadsPerRound && c.stream.isOpen(); ++reads) {
     const rt::UnixStream::Result r = c.stream.read(buf, sizeof buf);
@@ -209,6 +252,7 @@ void Service::readClient(Client& c) {
     while (start < data.size()) {
       const std::size_t nl = data.find('\n', start);
       const std::string_view piece = data.substr(start, nl == std::string_view::npos ? std::string_view::npos : nl - start);
+      if (nl != std::string_view::npos) c.last_line = now;
       if (c.discarding) {
         if (nl != std::string_view::npos) c.discarding = false;  // the over-long line ends here
       } else {

@@ -1,7 +1,7 @@
 #pragma once
 // staad's service thread (normal priority; the daemon's main thread): the control socket,
 // the log and telemetry rings drained, sd_notify. One poll round at a time over the
-// listening socket, up to kMaxClients clients and the SIGTERM/SIGINT descriptor, with a short
+// listening socket, up to max_clients clients and the SIGTERM/SIGINT descriptor, with a short
 // timeout so that the rings are drained and the watchdog pinged on time.
 //
 // Control socket: a Unix stream socket speaking line-delimited JSON (protocol.hpp). Each
@@ -10,6 +10,11 @@
 // requests go to the control thread through the request ring; status is answered here from
 // the latest Status snapshot, histograms from the periodic threads' histograms. Goals are numbered here (1, 2, ...) as they are queued. Debug
 // requests (tests' fault injection, only with debug.faults) set Channels' debug atomics.
+//
+// Abusive clients cannot hold the socket: a client that has not completed a line (any line
+// ending in '\n', a request, an error or a blank one) within the idle timeout since its last
+// one, or since it connected, is dropped; when all max_clients slots are taken, a new client
+// makes room by dropping the longest-idle one. So silent connections cannot lock staactl out.
 //
 // With an SVG path (`--svg`, telemetry.svg) the service keeps the run as it goes (the poses of
 // the telemetry records, decimated; the goals it queued) and draws it when staad stops.
@@ -48,6 +53,8 @@ class ServiceError : public std::runtime_error {
 struct ServiceOptions {
   std::string socket_path;
   unsigned socket_mode = 0660;
+  std::size_t max_clients = 16;                       // config socket.max_clients
+  rt::Nanos idle_timeout = 5 * rt::kNanosPerSecond;   // config socket.idle_timeout_s
   std::filesystem::path telemetry_path;  // empty: off
   std::filesystem::path svg_path;        // the run's picture at shutdown; empty: off
   std::optional<rt::Nanos> watchdog_interval;  // rt::Notifier::watchdogInterval()
@@ -56,8 +63,6 @@ struct ServiceOptions {
 
 class Service {
  public:
-  static constexpr std::size_t kMaxClients = 16;
-
   Service(Channels& channels, const rt::Notifier& notifier, ServiceOptions options, std::ostream& log);
   ~Service();
   Service(const Service&) = delete;
@@ -124,11 +129,15 @@ class Service {
     std::string out;
     bool discarding = false;  // dropping the rest of an over-long line
     bool closing = false;     // peer closed its side: close once `out` is sent
+    rt::Nanos last_line = 0;  // when it connected or last completed a line
   };
 
   void openSocket();
-  void acceptClients();
-  void readClient(Client& client);
+  void acceptClients(rt::Nanos now);
+  void makeRoom(rt::Nanos now);
+  void dropIdleClients(rt::Nanos now);
+  void dropClient(Client& client, const std::string& reply, const std::string& log_line);
+  void readClient(Client& client, rt::Nanos now);
   void handleLine(Client& client, std::string_view line);
   void handleDebug(Client& client, const Request& request);
   void flushClient(Client& client);

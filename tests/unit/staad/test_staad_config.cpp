@@ -158,6 +158,8 @@ TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
   EXPECT_EQ(c.control_thread.name, "staad-control");
   EXPECT_EQ(c.socket_path, "/run/staad/staad.sock");
   EXPECT_EQ(c.socket_mode, 0660u);
+  EXPECT_EQ(c.socket_max_clients, 16u);
+  EXPECT_DOUBLE_EQ(c.socket_idle_timeout_s, 5.0);
   EXPECT_DOUBLE_EQ(c.odometry_timeout_s, 0.1);
   EXPECT_DOUBLE_EQ(c.obstacles_timeout_s, 0.2);
   EXPECT_TRUE(c.telemetry_path.empty());
@@ -220,6 +222,15 @@ TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
       {"mode: \"0660\"", "mode: rw-rw----", {"socket.mode", "rw-rw----"}},
       {"mode: \"0660\"", "mode: 660", {"socket.mode", "660"}},
       {"mode: \"0660\"", "mode: \"01777\"", {"socket.mode", "01777"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  max_clients: 0", {"socket.max_clients", "1..256", "got 0"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  max_clients: 257", {"socket.max_clients", "1..256", "257"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  max_clients: 2.5", {"socket.max_clients", "integer", "2.5"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  idle_timeout_s: 0", {"socket.idle_timeout_s", "[0.1, 3600]", "got 0"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  idle_timeout_s: 0.05", {"socket.idle_timeout_s", "0.05"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  idle_timeout_s: 4000", {"socket.idle_timeout_s", "4000"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  idle_timeout_s: .nan", {"socket.idle_timeout_s", "finite", ".nan"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  idle_timeout_s: soon", {"socket.idle_timeout_s", "'soon'"}},
+      {"mode: \"0660\"", "mode: \"0660\"\n  max_client: 4", {"socket.max_client", "unknown key", "path, mode, max_clients, idle_timeout_s"}},
       {"odometry_timeout_s: 0.1", "odometry_timeout_s: 0", {"limits.odometry_timeout_s", "> 0", "got 0"}},
       {"odometry_timeout_s: 0.1", "odometry_timeout_s: 0.005", {"limits.odometry_timeout_s", "base_hz", "0.005"}},
       {"obstacles_timeout_s: 0.2", "obstacles_timeout_s: -1", {"limits.obstacles_timeout_s", "-1"}},
@@ -282,6 +293,17 @@ TEST_F(ConfigFiles, BudgetInMillisecondsAndExpansionsTogetherIsRejected) {
   EXPECT_THAT(error, HasSubstr("staad.yaml:16: "));  // the budget mapping's line
 }
 
+TEST_F(ConfigFiles, SocketClientLimitAndIdleTimeoutAreRead) {
+  const DaemonConfig c =
+      loadDaemonConfig(write("staad.yaml", edited("mode: \"0660\"", "mode: \"0660\"\n  max_clients: 4\n  idle_timeout_s: 0.3")));
+  EXPECT_EQ(c.socket_max_clients, 4u);
+  EXPECT_DOUBLE_EQ(c.socket_idle_timeout_s, 0.3);
+  const DaemonConfig edges =
+      loadDaemonConfig(write("edges.yaml", edited("mode: \"0660\"", "mode: \"0660\"\n  max_clients: 256\n  idle_timeout_s: 3600")));
+  EXPECT_EQ(edges.socket_max_clients, 256u);
+  EXPECT_DOUBLE_EQ(edges.socket_idle_timeout_s, 3600.0);
+}
+
 TEST_F(ConfigFiles, ExpansionBudgetReplacesTheWallClock) {
   const DaemonConfig c = loadDaemonConfig(write("staad.yaml", edited("ms: 19", "expansions: 1000")));
   ASSERT_TRUE(c.budget.isExpansions());
@@ -321,6 +343,8 @@ sim: {start: [1.5, 4.5, 0.0]}
   EXPECT_DOUBLE_EQ(c.budget.ms, defaults.budget.ms);
   EXPECT_EQ(c.socket_path, defaults.socket_path);
   EXPECT_EQ(c.socket_mode, defaults.socket_mode);
+  EXPECT_EQ(c.socket_max_clients, defaults.socket_max_clients);
+  EXPECT_DOUBLE_EQ(c.socket_idle_timeout_s, defaults.socket_idle_timeout_s);
   EXPECT_EQ(c.sim.movers, hal::SimHalConfig{}.movers);
   EXPECT_EQ(c.telemetry_records, defaults.telemetry_records);
 
