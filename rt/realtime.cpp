@@ -424,4 +424,14 @@ void* RtThread::trampoline(void* arg) {
   return nullptr;
 }
 
+std::string setThisThreadNice(int nice) {
+  // On Linux the nice value is per thread: PRIO_PROCESS with the thread's id.
+  const auto tid = static_cast<id_t>(::gettid());
+  if (::setpriority(PRIO_PROCESS, tid, nice) != 0) {
+    const int e = errno;
+    return "nice " + std::to_string(nice) + " refused: " + std::strerror(e);
+  }
+  return {};
+}
+
 }  // namespace staa::rt

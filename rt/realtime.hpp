@@ -24,6 +24,11 @@ struct MemoryReport {
 // it stays in the process, locked) and `stack_bytes` of the calling thread's stack.
 MemoryReport lockMemory(std::size_t heap_bytes, std::size_t stack_bytes);
 
+// Sets the calling thread's nice value (-20..19; normal scheduling's share of the CPU).
+// Returns an empty string, or why it was refused (a lower value needs CAP_SYS_NICE or
+// RLIMIT_NICE, systemd's LimitNICE=).
+std::string setThisThreadNice(int nice);
+
 struct ThreadSpec {
   std::string name;                      // <= 15 characters (pthread_setname_np)
   int priority = 0;                      // SCHED_FIFO priority 1..99; 0: normal scheduling

@@ -43,6 +43,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), 
 PERIOD_US = 33333
 WAKE_FACTOR = 2.0      # wake-up p99 within 2 x cyclictest's p99 ...
 WAKE_SLACK_US = 50.0   # ... plus 50 us
+STALL_GAP_US = 3000.0  # rt::kStallGap (rt/periodic.hpp): a longer gap between clock reads is a stall
 # The office's rooms in turn (measure-staad.sh's goals).
 GOALS = [(4.5, 1.5), (13.5, 1.5), (22.5, 1.5), (4.5, 25.5), (13.5, 25.5), (22.5, 25.5), (25.5, 22.5),
          (10.5, 4.5), (1.5, 4.5)]
@@ -153,12 +154,17 @@ def gates(section, status, long_run):
     budget_ms = planner.get("budget_ms")
     control = section["threads"].get("control")
     if budget_ms is not None and control is not None:
-        bound = budget_ms * 1000.0 + planner.get("path_max_us", 0.0) + planner.get("local_max_us", 0.0)
+        # Plus one stall below the threshold that counts a gap as the platform's: a shorter one
+        # is not taken out (it cannot be told from the cycle's own work between two clock
+        # reads), and this machine's wake-ups alone show stalls of 2.5 ms.
+        bound = (budget_ms * 1000.0 + planner.get("path_max_us", 0.0) + planner.get("local_max_us", 0.0)
+                 + STALL_GAP_US)
         own = control["own_execution_max_us"]
         gate("control.execution_bound", own <= bound, True,
              f"control: execution max {own:.0f} us (less measured stalls) past the bound {bound:.0f} us (budget "
              f"{budget_ms:g} ms + path step max {planner.get('path_max_us', 0.0):.0f} us + local-map step max "
-             f"{planner.get('local_max_us', 0.0):.0f} us)", value=own, limit=bound,
+             f"{planner.get('local_max_us', 0.0):.0f} us + one unmeasured stall under {STALL_GAP_US / 1000:g} ms)",
+             value=own, limit=bound,
              exec_max=control["exec_us"]["max"])
     else:
         out.append({"name": "control.execution_bound", "ok": True, "gating": False,

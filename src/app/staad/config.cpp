@@ -448,7 +448,7 @@ void readDebug(const ConfigValue& root, DaemonConfig& config) {
 }
 
 void readThreads(const ConfigValue& root, DaemonConfig& config) {
-  const ConfigValue threads = root.section("threads", {"control", "base", "perception"});
+  const ConfigValue threads = root.section("threads", {"control", "base", "perception", "service"});
   auto thread = [&](std::string_view key, rt::ThreadSpec& spec) {
     const ConfigValue t = threads.section(key, {"priority", "cpu"});
     if (const ConfigValue p = t.get("priority"); p.given()) {
@@ -459,6 +459,10 @@ void readThreads(const ConfigValue& root, DaemonConfig& config) {
   thread("control", config.control_thread);
   thread("base", config.base_thread);
   thread("perception", config.perception_thread);
+  const ConfigValue service = threads.section("service", {"nice"});
+  if (const ConfigValue n = service.get("nice"); n.given()) {
+    config.service_nice = static_cast<int>(n.integer(-20, 19, " (the service thread's nice value)"));
+  }
 }
 
 // Permission bits as people write them for chmod: octal with a leading 0 ("0660", also YAML

@@ -152,6 +152,9 @@ struct DaemonConfig {
   rt::ThreadSpec control_thread{"staad-control", 80, -1};
   rt::ThreadSpec base_thread{"staad-base", 85, -1};
   rt::ThreadSpec perception_thread{"staad-percept", 70, -1};
+  // The service (main) thread's nice value: it answers the control socket, and a stop must
+  // not wait behind every other normal process of the machine (busy clients among them).
+  int service_nice = -10;
   std::string socket_path = "/run/staad/staad.sock";
   unsigned socket_mode = 0660;
   // The control socket's clients at once (a new one makes room by dropping the longest idle),

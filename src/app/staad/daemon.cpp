@@ -342,6 +342,10 @@ int Daemon::run() {
   for (const std::string& w : memory.warnings) say("warning: " + w);
 
   startThreads();
+  // After the real-time threads started (they do not inherit it): the service thread only.
+  if (const std::string refused = rt::setThisThreadNice(config_.service_nice); !refused.empty()) {
+    say("warning: threads.service: " + refused + " (the control socket answers at normal priority)");
+  }
   rt::resetRealtimeAllocations();
   service_->watchTiming(control_.get(), base_->started() ? base_.get() : nullptr,
                         base_->started() ? base_task_.get() : nullptr,

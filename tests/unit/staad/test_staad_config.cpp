@@ -49,6 +49,7 @@ threads:
   control: {priority: 80, cpu: -1}
   base: {priority: 85, cpu: 0}
   perception: {priority: 0, cpu: -1}
+  service: {nice: -5}
 socket:
   path: /run/staad/staad.sock
   mode: "0660"
@@ -152,6 +153,7 @@ TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
   EXPECT_EQ(c.control_thread.priority, 80);
   EXPECT_EQ(c.base_thread.priority, 85);
   EXPECT_EQ(c.perception_thread.priority, 70);
+  EXPECT_EQ(c.service_nice, -10);
   EXPECT_EQ(c.control_thread.cpu, -1);
   EXPECT_EQ(c.base_thread.cpu, -1);
   EXPECT_EQ(c.perception_thread.cpu, -1);
@@ -181,6 +183,7 @@ TEST_F(ConfigFiles, ReadsEveryKeyOfAValidConfig) {
   EXPECT_DOUBLE_EQ(c.sim.sensor_range_m, 6.0);
   EXPECT_EQ(c.base_thread.cpu, 0);
   EXPECT_EQ(c.perception_thread.priority, 0);
+  EXPECT_EQ(c.service_nice, -5);
   EXPECT_TRUE(c.svg_path.empty());  // "": off
 }
 
@@ -218,6 +221,8 @@ TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
       {"control: {priority: 80", "control: {priority: -1", {"threads.control.priority", "-1"}},
       {"base: {priority: 85, cpu: 0}", "base: {priority: 85, cpu: -2}", {"threads.base.cpu", "-1..1023", "-2"}},
       {"perception: {priority: 0, cpu: -1}", "perception: {priority: 0, cpu: 1024}", {"threads.perception.cpu", "1024"}},
+      {"service: {nice: -5}", "service: {nice: -21}", {"threads.service.nice", "-20..19", "-21"}},
+      {"service: {nice: -5}", "service: {nice: 3.5}", {"threads.service.nice", "3.5"}},
       {"mode: \"0660\"", "mode: \"0999\"", {"socket.mode", "octal", "0999"}},
       {"mode: \"0660\"", "mode: rw-rw----", {"socket.mode", "rw-rw----"}},
       {"mode: \"0660\"", "mode: 660", {"socket.mode", "660"}},
