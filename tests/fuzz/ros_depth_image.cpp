@@ -69,7 +69,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
     }
   }
-  if ((flags & 4) != 0) pose = {in.take<bool>(), in.take<double>(), in.take<double>(), in.take<double>(),
+  if ((flags & 4) != 0) pose = {(in.take<std::uint8_t>() & 1) != 0, in.take<double>(), in.take<double>(), in.take<double>(),
                                 in.take<double>(), in.take<double>(), in.take<double>()};
 
   std::vector<std::uint8_t> bytes;
