@@ -22,6 +22,7 @@ PACKAGES=(
   libeigen3-dev libccd-dev libpolyclipping-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
+  clang-14 libclang-rt-14-dev  # the libFuzzer targets (tests/fuzz, the fuzz preset)
   librsvg2-bin   # rsvg-convert: SVG -> PNG for the README picture and experiment plots
   # The timing measurements (tests/timing): instruction counts, the platform's own wake-up
   # latency beside staad's, and a load on every core.

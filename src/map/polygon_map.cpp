@@ -13,6 +13,27 @@
 namespace staa {
 namespace {
 
+// The index of the first byte that breaks UTF-8 in `text`, or text.size(): a name is written
+// back out through yaml-cpp, which replaces such bytes (the map would not read back the same).
+std::size_t firstInvalidUtf8(std::string_view text) {
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const auto b = static_cast<unsigned char>(text[i]);
+    const std::size_t n = b < 0x80 ? 1 : (b >> 5) == 0x6 && b >= 0xC2 ? 2 : (b >> 4) == 0xE ? 3 : (b >> 3) == 0x1E && b <= 0xF4 ? 4 : 0;
+    if (n == 0 || i + n > text.size()) return i;
+    for (std::size_t k = 1; k < n; ++k) {
+      if ((static_cast<unsigned char>(text[i + k]) & 0xC0) != 0x80) return i;
+    }
+    const auto b1 = static_cast<unsigned char>(text[i + 1 < text.size() ? i + 1 : i]);
+    if ((n == 3 && ((b == 0xE0 && b1 < 0xA0) || (b == 0xED && b1 >= 0xA0))) ||
+        (n == 4 && ((b == 0xF0 && b1 < 0x90) || (b == 0xF4 && b1 >= 0x90)))) {
+      return i;  // overlong, a surrogate or beyond U+10FFFF
+    }
+    i += n;
+  }
+  return i;
+}
+
 constexpr std::string_view kFormat = "staa-polygon-map/1";
 // Maps are metric and robot-sized; a coordinate beyond 1000 km is a corrupt file, and the
 // bound keeps every cross product in the checks below far from overflow.
@@ -62,7 +83,13 @@ std::string indexed(const char* list, std::size_t i) { return std::string(list) 
 
 PolygonMap readDocument(const io::ConfigValue& root) {
   PolygonMap map;
-  if (const io::ConfigValue name = root.get("name"); name.present()) map.name = name.string("a string");
+  if (const io::ConfigValue name = root.get("name"); name.present()) {
+    map.name = name.string("a string");
+    if (const std::size_t at = firstInvalidUtf8(map.name); at < map.name.size()) {
+      name.fail("not valid UTF-8 (byte " + std::to_string(at) + " of the name is " +
+                std::to_string(static_cast<unsigned char>(map.name[at])) + ")");
+    }
+  }
   // `bounds:` left empty means no bounds.
   if (const io::ConfigValue bounds = root.get("bounds"); bounds.present()) {
     const auto v = bounds.numbers<4>("4 numbers [xmin, ymin, xmax, ymax]");

@@ -65,7 +65,12 @@ StaticMapMask::StaticMapMask(const PolygonMap& map, double cell_m, double margin
 }
 
 std::int64_t StaticMapMask::cellIndex(double coordinate) const {
-  return static_cast<std::int64_t>(std::floor(coordinate / cell_m_));
+  // A coordinate beyond any map (a pose from a lost localisation, NaN) names a cell far
+  // outside the mask: converting it unclamped to an integer would be undefined.
+  constexpr double kFar = 1e15;
+  const double c = std::floor(coordinate / cell_m_);
+  if (std::isnan(c)) return static_cast<std::int64_t>(kFar);
+  return static_cast<std::int64_t>(std::clamp(c, -kFar, kFar));
 }
 
 void StaticMapMask::mark(std::int64_t i, std::int64_t j) {
