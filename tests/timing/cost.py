@@ -86,15 +86,6 @@ def run_workload(staa_cost, name, cycles, work):
     for old in glob.glob(prefix + ".*"):
         os.remove(old)
     counts_json = os.path.join(work, name + ".counts.json")
-    # The same argv and environment wherever the checkout and the output are: the program's
-    # allocations before the measured cycles, and so the heap's layout, then stay the same
-    # (a longer path moved buffers and changed memset's instructions by 0.1 %).
-    links = {"staa-cost": staa_cost, "src": ROOT, "shared": shared_dir()}
-    for link, target in links.items():
-        path = os.path.join(work, link)
-        if os.path.islink(path) or os.path.exists(path):
-            os.remove(path)
-        os.symlink(os.path.realpath(target), path)
     cmd = VALGRIND + [f"--callgrind-out-file={name}.%p", "./staa-cost", "run", name, "--cycles", str(cycles),
                       "--root", "src", "--shared", "shared", "--scenes", "src/tests/timing/scenes",
                       "--json", name + ".counts.json"]
@@ -212,6 +203,15 @@ def run_cost(build, baseline, out_dir, update_baseline=False, only=None, jobs=No
     work = os.path.join(out_dir, "callgrind")
     os.makedirs(work, exist_ok=True)
     base = {} if update_baseline else load_baseline(baseline)
+    # The same argv and environment wherever the checkout and the output are: the program's
+    # allocations before the measured cycles, and so the heap's layout, then stay the same
+    # (a longer path moved buffers and changed memset's instructions by 0.1 %). Made once,
+    # before the workloads run in parallel.
+    for link, target in {"staa-cost": staa_cost, "src": ROOT, "shared": shared_dir()}.items():
+        path = os.path.join(work, link)
+        if os.path.islink(path) or os.path.exists(path):
+            os.remove(path)
+        os.symlink(os.path.realpath(target), path)
 
     start = time.monotonic()
     jobs = jobs or max(1, min(2, os.cpu_count() or 1))
