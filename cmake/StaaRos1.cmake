@@ -34,5 +34,7 @@ endif()
 
 function(staa_ros1_target target)
   target_link_libraries(${target} PRIVATE staa::ros1)
-  set_target_properties(${target} PROPERTIES CXX_STANDARD 17 CXX_STANDARD_REQUIRED ON CXX_EXTENSIONS OFF)
+  # Never a unity build: our namespace staa::staad::ros would hide ROS's ::ros in the files after.
+  set_target_properties(${target} PROPERTIES CXX_STANDARD 17 CXX_STANDARD_REQUIRED ON CXX_EXTENSIONS OFF
+                                             UNITY_BUILD OFF)
 endfunction()

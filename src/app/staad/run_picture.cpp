@@ -1,4 +1,5 @@
 #include "app/staad/run_picture.hpp"
+#include "app/staad/text.hpp"
 
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
@@ -26,12 +27,6 @@ constexpr const char* kReached = "#2b8a3e";
 constexpr const char* kMissed = "#c92a2a";
 constexpr const char* kRobot = "#2c3e50";
 constexpr double kGoalMarkerPx = 6.0;
-
-std::string quoted(const std::string& s) {
-  std::string q = "'";  // appended: GCC 12 warns falsely (-Wrestrict) on "'" + s + "'"
-  q.append(s).append("'");
-  return q;
-}
 
 fs::path tempPathOf(const fs::path& path) {
   fs::path tmp = path;

@@ -2,6 +2,7 @@
 
 #include "app/staad/io_tasks.hpp"
 #include "app/staad/protocol.hpp"
+#include "app/staad/text.hpp"
 #include "rt/alloc_count.hpp"
 #include "rt/errors.hpp"
 
@@ -18,12 +19,6 @@ namespace {
 
 constexpr std::size_t kMaxPendingReplyBytes = 1u << 20;  // a client that never reads is dropped
 constexpr int kMaxReadsPerRound = 16;                    // one busy client cannot starve the rest
-
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  q.append(s).append("'");
-  return q;
-}
 
 std::string seconds(rt::Nanos t) {
   char text[32];

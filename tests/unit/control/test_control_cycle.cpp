@@ -110,7 +110,7 @@ TEST(ControlCycle, TheSlowHsrStartsFromStandstillAndTurnsIntoARoom) {
   Scenario s;
   s.name = "office";
   s.map = generateOfficeMap();
-  s.robot = loadRobotProfile(std::string(STAA_SOURCE_DIR) + "/config/robots/hsr.yaml");
+  s.robot = loadRobotProfile(std::filesystem::path(STAA_SOURCE_DIR) / "config/robots/hsr.yaml");
   s.start = {1.5, 4.5, 0.0};
   s.goal = {4.5, 1.5, 0.0};
   SimOptions o;
@@ -207,7 +207,7 @@ TEST(ControlCycle, WithoutAPathAMovingRobotStopsClearOfTheObstacleAhead) {
 // full speed, 0.2 m before the goal; the tolerance now scales with the robot.
 TEST(ControlCycle, TheHsrReportsReachedOnlyWhenNearlyStoppedAtTheGoal) {
   const PolygonMap map = generateOfficeMap();
-  const RobotProfile robot = loadRobotProfile(std::string(STAA_SOURCE_DIR) + "/config/robots/hsr.yaml");
+  const RobotProfile robot = loadRobotProfile(std::filesystem::path(STAA_SOURCE_DIR) / "config/robots/hsr.yaml");
   ControlCycle cycle(map, robot, ControlConfig{});
   const Pose2 goal{4.0, 4.5, 0.0};
   cycle.setGoal(goal);
