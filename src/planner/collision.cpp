@@ -211,29 +211,45 @@ bool CollisionChecker::motionFreeStatic(const UnicycleState& from, const ArcVelo
                                         std::cos(dth), std::sin(dth)));
 }
 
-bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const {
+bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const { return motionFreeStatic(m, 0.0, nullptr); }
+
+bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, double* end_slack) const {
+  // No point of the robot leaves the start pose's clearance: the whole motion is free (every
+  // sample's lookups would say so too; the field is 1-Lipschitz and conservative).
+  const double travel = travelBound(m);
+  if (start_slack > 0.0 && travel <= start_slack) {
+    if (end_slack != nullptr) *end_slack = -1.0;
+    return true;
+  }
   // Check the end pose first: most collisions show there, and it is the one the paper checks.
-  if (!fastPoseFreeStatic(FastPose{m.x1, m.y1, m.c1, m.s1})) return false;
+  double end_margin = 0.0;
+  const bool end_free = fastPoseFreeStatic(FastPose{m.x1, m.y1, m.c1, m.s1}, &end_margin);
+  if (end_slack != nullptr) *end_slack = end_margin;
+  if (!end_free) return false;
   const ArcVelocities vel{0.0, 0.0, m.v_mid, m.w_mid};
   const int n = samplesFor(vel, m.dt);
   if (n <= 1) return true;
   // The samples in between, stepping the heading by a fixed rotation. A checked pose's
   // clearance margin lets the following samples within that much travel go unchecked: no
-  // point of the robot moves farther than the travel bound per sample.
+  // point of the robot moves farther than the travel bound per sample. The start's margin
+  // covers the first samples, the end's the last ones.
+  const double per_sample = travel / n;
+  if (start_slack + end_margin >= travel) return true;
   const double step = m.w_mid * m.dt / n;
   double cs, ss;
   sinCos(step, cs, ss);
   const bool straight = std::abs(m.w_mid * m.dt) < 1e-6;
   const double r = straight ? 0.0 : m.v_mid / m.w_mid;
-  const double per_sample = (std::abs(m.v_mid) * m.dt + std::abs(m.w_mid) * m.dt * circumradius_) / n;
   double c = m.c0, sn = m.s0;
-  double covered = -1.0;  // travel still covered by the last checked pose's margin
+  double covered = start_slack > 0.0 ? start_slack : -1.0;  // travel still covered by the last checked pose's margin
   for (int k = 1; k < n; ++k) {
     const double nc = c * cs - sn * ss;
     sn = sn * cs + c * ss;
     c = nc;
     covered -= per_sample;
     if (covered >= 0.0) continue;
+    // The rest lies within the end pose's margin.
+    if (static_cast<double>(n - k) * per_sample <= end_margin) return true;
     FastPose p{0.0, 0.0, c, sn};
     if (straight) {
       const double d = m.v_mid * m.dt * k / n;

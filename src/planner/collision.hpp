@@ -18,6 +18,7 @@
 #include "robot/unicycle.hpp"
 
 #include <array>
+#include <cmath>
 #include <span>
 #include <vector>
 
@@ -41,6 +42,17 @@ class CollisionChecker {
   // close enough that no footprint point moves more than a sample step between them.
   bool motionFreeStatic(const UnicycleState& from, const ArcVelocities& vel, double dt) const;
   bool motionFreeStatic(const ArcMotion& motion) const;
+  // The same test, knowing how far every point of the robot may move from the motion's start
+  // without touching the grid (`start_slack`, from fastPoseFreeStatic; 0 when unknown): a
+  // motion no point of which travels farther is free without a lookup, and the samples within
+  // that travel of either end (the end pose's own slack) are not looked up. `end_slack`, when
+  // given, receives the end pose's slack, or -1 when the end pose was not looked up.
+  bool motionFreeStatic(const ArcMotion& motion, double start_slack, double* end_slack) const;
+  // The farthest any point of the robot travels along the motion: its bound on how far a
+  // clearance margin must reach.
+  double travelBound(const ArcMotion& motion) const {
+    return std::abs(motion.v_mid) * motion.dt + std::abs(motion.w_mid) * motion.dt * circumradius_;
+  }
   // The footprint at `pose` overlaps none of the obstacles moved to time t. With
   // heading_spread > 0 (rad) each obstacle is grown by heading_spread times the distance it
   // has moved: the room an obstacle needs whose heading is known only to about that angle

@@ -247,10 +247,11 @@ void StaaStar::rotationsFor(const UnicycleState& s) {
 }
 
 bool StaaStar::motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
-                          const DynamicObstacleSet& obstacles, bool predict, PlanStats& st) const {
+                          const DynamicObstacleSet& obstacles, bool predict, double& end_slack, PlanStats& st) const {
   const double t0 = node.depth * config_.dt;
   const std::int64_t tc = now();
-  bool free = config_.check_swept ? collision_.motionFreeStatic(motion)
+  end_slack = -1.0;
+  bool free = config_.check_swept ? collision_.motionFreeStatic(motion, node.slack, &end_slack)
                                   : collision_.fastPoseFreeStatic({motion.x1, motion.y1, motion.c1, motion.s1});
   if (free && predict) {
     const Pose2 end{motion.x1, motion.y1, motion.theta1};
@@ -275,7 +276,7 @@ double StaaStar::pathCost(const UnicycleState& child, int depth, const DynamicOb
 
 void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st) {
   ++st.expansions;
-  const Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool is appended below
+  Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool is appended below
   const int depth = node.depth + 1;
   const bool predict = depth <= config_.prediction_depth;
   const bool restrict_root = config_.brake_safety && id == 0;
@@ -284,6 +285,16 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
   const std::size_t notches = actions_.notches();
   const double c0 = std::cos(node.s.theta), s0 = std::sin(node.s.theta);
   rotationsFor(node.s);
+  if (node.slack < 0.0 && config_.check_swept) {
+    // The pose's clearance, for the swept checks of its 49 motions (not looked up when the
+    // node was generated: its motion lay within its parent's clearance).
+    const std::int64_t tc = now();
+    double slack = 0.0;
+    if (!collision_.fastPoseFreeStatic({node.s.x, node.s.y, c0, s0}, &slack)) slack = 0.0;
+    node.slack = slack;
+    nodes_[static_cast<std::size_t>(id)].slack = slack;
+    if (timing_) st.collision_ns += now() - tc;
+  }
   for (std::size_t a = 0; a < actions_.size(); ++a) {
     ++st.successors;
     if (restrict_root && !root_allowed_[a]) {
@@ -297,12 +308,14 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
     std::size_t child_cell = 0;
     if (!closedIndex(child.x, child.y, child.theta, child_cell)) continue;  // outside the local map
     if (closed_[child_cell] == generation_) continue;                        // checked on push too
-    if (!motionFree(node, motion, vel, obstacles, predict, st)) {
+    double end_slack = -1.0;
+    if (!motionFree(node, motion, vel, obstacles, predict, end_slack, st)) {
       ++st.collisions;
       continue;
     }
     if (nodes_.size() == nodes_.capacity()) break;  // pool full: no more pushes
     Node c;
+    c.slack = end_slack;
     c.evaluated = !config_.lazy_heuristic;
     c.s = child;
     c.g = pathCost(child, depth, obstacles, predict);

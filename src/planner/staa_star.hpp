@@ -150,6 +150,9 @@ class StaaStar {
     std::uint16_t depth = 0;
     std::uint8_t action = 0;
     bool evaluated = true;  // h is the true heuristic (false: a lower bound, lazy mode)
+    // How far every point of the robot may move from this pose without touching the grid
+    // (CollisionChecker::fastPoseFreeStatic's slack); -1 until looked up.
+    double slack = -1.0;
   };
   struct QueueEntry {
     double f;
@@ -181,7 +184,7 @@ class StaaStar {
   void expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st);
   void rotationsFor(const UnicycleState& s);
   bool motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
-                  const DynamicObstacleSet& obstacles, bool predict, PlanStats& st) const;
+                  const DynamicObstacleSet& obstacles, bool predict, double& end_slack, PlanStats& st) const;
   double pathCost(const UnicycleState& child, int depth, const DynamicObstacleSet& obstacles, bool predict) const;
   void finish(const UnicycleState& start, std::int32_t best, PlanResult& result);
   // The phase timing's clock reading (the budget's clock), 0 while timing is off.
