@@ -266,44 +266,50 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, 
   return true;
 }
 
+bool CollisionChecker::obstacleHits(std::size_t k, const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
+                                    double heading_spread, bool turning, bool& placed) const {
+  const Vec2 p = pose.position();
+  const FixedPolygon& o = obstacles.observed(k);
+  const Vec2 shift = obstacles.displacement(k, t);
+  const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
+  const double r = 0.5 * (o.box.max - o.box.min).norm();
+  const double spread = heading_spread > 0.0 ? heading_spread * shift.norm() : 0.0;
+  // The grown polygon's rounded corners lie within sqrt(2) * spread of the outline.
+  const double reach = r + circumradius_ + 2.0 * dynamic_margin_ + 1.5 * spread;
+  const auto overlaps = [&](const FixedPolygon& obstacle) {
+    if (!placed) {
+      transformPolygon(footprint_dynamic_, pose, placed_);
+      placed = true;
+    }
+    const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
+    return convex_ ? convexIntersect(robot, obstacle.view()) : polygonsOverlap(robot, obstacle.view());
+  };
+  if ((center - p).squaredNorm() <= reach * reach) {
+    if (spread > 0.0) {
+      obstacles.predictInflated(k, t, spread, 1, scratch_);
+    } else {
+      obstacles.predict(k, t, scratch_);
+    }
+    if (overlaps(scratch_)) return true;
+  }
+  // On its circle the obstacle's centre stays within the distance it has travelled of where
+  // it was seen (a chord is no longer than its arc): far ones are skipped unpredicted.
+  const Vec2 seen_center = 0.5 * (o.box.min + o.box.max);
+  const double circle_reach = shift.norm() + r + circumradius_ + 2.0 * dynamic_margin_;
+  if (turning && obstacles.turnRate(k) != 0.0 && (seen_center - p).squaredNorm() <= circle_reach * circle_reach) {
+    obstacles.predictTurning(k, t, scratch_);
+    const Vec2 turned_center = 0.5 * (scratch_.box.min + scratch_.box.max);
+    const double turned_reach = 0.5 * (scratch_.box.max - scratch_.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
+    if ((turned_center - p).squaredNorm() <= turned_reach * turned_reach && overlaps(scratch_)) return true;
+  }
+  return false;
+}
+
 bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
                                        double heading_spread, bool turning) const {
-  const Vec2 p = pose.position();
   bool placed = false;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
-    const FixedPolygon& o = obstacles.observed(k);
-    const Vec2 shift = obstacles.displacement(k, t);
-    const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
-    const double r = 0.5 * (o.box.max - o.box.min).norm();
-    const double spread = heading_spread > 0.0 ? heading_spread * shift.norm() : 0.0;
-    // The grown polygon's rounded corners lie within sqrt(2) * spread of the outline.
-    const double reach = r + circumradius_ + 2.0 * dynamic_margin_ + 1.5 * spread;
-    const auto overlaps = [&](const FixedPolygon& obstacle) {
-      if (!placed) {
-        transformPolygon(footprint_dynamic_, pose, placed_);
-        placed = true;
-      }
-      const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
-      return convex_ ? convexIntersect(robot, obstacle.view()) : polygonsOverlap(robot, obstacle.view());
-    };
-    if ((center - p).squaredNorm() <= reach * reach) {
-      if (spread > 0.0) {
-        obstacles.predictInflated(k, t, spread, 1, scratch_);
-      } else {
-        obstacles.predict(k, t, scratch_);
-      }
-      if (overlaps(scratch_)) return false;
-    }
-    // On its circle the obstacle's centre stays within the distance it has travelled of where
-    // it was seen (a chord is no longer than its arc): far ones are skipped unpredicted.
-    const Vec2 seen_center = 0.5 * (o.box.min + o.box.max);
-    const double circle_reach = shift.norm() + r + circumradius_ + 2.0 * dynamic_margin_;
-    if (turning && obstacles.turnRate(k) != 0.0 && (seen_center - p).squaredNorm() <= circle_reach * circle_reach) {
-      obstacles.predictTurning(k, t, scratch_);
-      const Vec2 turned_center = 0.5 * (scratch_.box.min + scratch_.box.max);
-      const double turned_reach = 0.5 * (scratch_.box.max - scratch_.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
-      if ((turned_center - p).squaredNorm() <= turned_reach * turned_reach && overlaps(scratch_)) return false;
-    }
+    if (obstacleHits(k, pose, obstacles, t, heading_spread, turning, placed)) return false;
   }
   return true;
 }
@@ -333,8 +339,49 @@ bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVel
   return true;
 }
 
-double CollisionChecker::distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const {
-  double best = std::numeric_limits<double>::infinity();
+std::size_t CollisionChecker::obstaclesNear(const Vec2& p0, double travel, const DynamicObstacleSet& obstacles,
+                                            double t0, double dt, std::span<std::uint32_t> near,
+                                            double& fastest) const {
+  // Obstacle k's centre at time t lies within speed * dt / 2 of its centre at the middle of
+  // the interval (its displacement grows by at most its speed), the robot's origin within
+  // `travel` of p0 (a chord is no longer than its arc); 1 nm covers the rounding of the
+  // samples' own arithmetic.
+  constexpr double kRounding = 1e-9;
+  fastest = 0.0;
+  std::size_t count = 0;
+  const double tm = t0 + 0.5 * dt;
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    const FixedPolygon& o = obstacles.observed(k);
+    const double speed = obstacles.velocity(k).norm();
+    fastest = std::max(fastest, speed);
+    if (count == near.size()) continue;  // no room: the caller checks against all of them
+    const Vec2 center = 0.5 * (o.box.min + o.box.max) + obstacles.displacement(k, tm);
+    const double reach = 0.5 * (o.box.max - o.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
+    const double far = reach + 0.5 * speed * dt + travel + kRounding;
+    if ((center - p0).squaredNorm() <= far * far) near[count++] = static_cast<std::uint32_t>(k);
+  }
+  return count;
+}
+
+bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
+                                         const DynamicObstacleSet& obstacles, double t0,
+                                         std::span<const std::uint32_t> near, double fastest) const {
+  if (near.empty()) return true;
+  const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
+  for (int k = n; k >= 1; --k) {
+    const double t = dt * k / n;
+    const Pose2 pose = poseAlongArc(from, vel.v_mid, vel.w_mid, t);
+    bool placed = false;
+    for (const std::uint32_t i : near) {
+      if (obstacleHits(i, pose, obstacles, t0 + t, 0.0, false, placed)) return false;
+    }
+  }
+  return true;
+}
+
+double CollisionChecker::distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t,
+                                           double beyond) const {
+  double best = beyond;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     const FixedPolygon& o = obstacles.observed(k);
     const Vec2 shift = obstacles.displacement(k, t);

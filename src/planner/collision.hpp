@@ -19,6 +19,8 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -66,8 +68,24 @@ class CollisionChecker {
                          const DynamicObstacleSet& obstacles, double t0, double heading_spread = 0.0,
                          bool turning = false) const;
 
-  // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3).
-  double distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const;
+  // The obstacles that can come near a motion from `p0` over [t0, t0 + dt] on which the robot's
+  // origin travels at most `travel`: every other one fails the bounding-circle test of every
+  // sample of every such motion (motionFreeDynamic without heading spread or turning). Writes
+  // their indices to `near` and returns how many (near.size() when it had no room for them all:
+  // then check against all obstacles); `fastest`
+  // receives the fastest obstacle's speed (all of them: it sets the number of samples).
+  std::size_t obstaclesNear(const Vec2& p0, double travel, const DynamicObstacleSet& obstacles, double t0, double dt,
+                            std::span<std::uint32_t> near, double& fastest) const;
+  // motionFreeDynamic (no heading spread, no turning) against the obstacles obstaclesNear
+  // found for this motion's start: the same samples, the same answer, fewer obstacles.
+  bool motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
+                         const DynamicObstacleSet& obstacles, double t0, std::span<const std::uint32_t> near,
+                         double fastest) const;
+
+  // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3);
+  // `beyond` when every edge is at least that far.
+  double distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t,
+                           double beyond = std::numeric_limits<double>::infinity()) const;
 
   // A pose with its heading's cosine and sine, so that a pose costs one sincos (or none, when
   // a caller steps along an arc by rotation).
@@ -92,6 +110,10 @@ class CollisionChecker {
 
  private:
   int samplesFor(const ArcVelocities& vel, double dt) const;
+  // Whether obstacle k at time t (grown and predicted as poseFreeDynamic says) overlaps the
+  // footprint at `pose`; `placed` caches the placed footprint across obstacles of one pose.
+  bool obstacleHits(std::size_t k, const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
+                    double heading_spread, bool turning, bool& placed) const;
   // Grid coordinates (cells) of a world point: the local map's frame of this cycle.
   double gridX(double x, double y) const { return frame_.gridX(x, y); }
   double gridY(double x, double y) const { return frame_.gridY(x, y); }
