@@ -57,7 +57,21 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
   closed_h_ = closed_size.height;
   closed_t_ = static_cast<int>(std::ceil(2.0 * kPi / config_.closed_theta_rad));
   inv_two_pi_ = 1.0 / (2.0 * kPi);
-  closed_.assign(static_cast<std::size_t>(closed_w_) * static_cast<std::size_t>(closed_h_) * static_cast<std::size_t>(closed_t_), 0);
+  const std::size_t cells = static_cast<std::size_t>(closed_w_) * static_cast<std::size_t>(closed_h_) * static_cast<std::size_t>(closed_t_);
+  closed_.assign((cells + 63) / 64, 0);
+  closed_words_.reserve(config_.max_nodes);  // a word is listed when a pop closes its first cell
+}
+
+void StaaStar::close(std::size_t cell) {
+  std::uint64_t& word = closed_[cell >> 6];
+  if (word == 0) {
+    if (closed_words_.size() < closed_words_.capacity()) {
+      closed_words_.push_back(static_cast<std::uint32_t>(cell >> 6));
+    } else {
+      closed_overflow_ = true;
+    }
+  }
+  word |= std::uint64_t{1} << (cell & 63);
 }
 
 // The closed table coincides with the local grid (paper, Sec. III-E-2): x and y in the box's
@@ -70,9 +84,9 @@ bool StaaStar::closedIndex(double x, double y, double theta, std::size_t& index)
   double th = theta * inv_two_pi_;
   th = (th - std::floor(th)) * closed_t_;  // [0, closed_t_)
   const int t = std::min(static_cast<int>(th), closed_t_ - 1);
-  index = (static_cast<std::size_t>(t) * static_cast<std::size_t>(closed_h_) + static_cast<std::size_t>(fj)) *
-              static_cast<std::size_t>(closed_w_) +
-          static_cast<std::size_t>(fi);
+  index = (static_cast<std::size_t>(fj) * static_cast<std::size_t>(closed_w_) + static_cast<std::size_t>(fi)) *
+              static_cast<std::size_t>(closed_t_) +
+          static_cast<std::size_t>(t);
   return true;
 }
 
@@ -206,10 +220,13 @@ void StaaStar::beginSearch(const UnicycleState& start, const LocalMap& map, cons
   nodes_.clear();
   queue_.clear();
   trajectory_.clear();
-  if (++generation_ == 0) {
+  if (closed_overflow_) {
     std::fill(closed_.begin(), closed_.end(), 0);
-    generation_ = 1;
+    closed_overflow_ = false;
+  } else {
+    for (const std::uint32_t w : closed_words_) closed_[w] = 0;
   }
+  closed_words_.clear();
   Node root;
   root.s = start;
   root.h = heuristic_.evaluate(start, 0);
@@ -325,7 +342,7 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
     const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, rot_w_end_[j]};
     std::size_t child_cell = 0;
     if (!closedIndex(child.x, child.y, child.theta, child_cell)) continue;  // outside the local map
-    if (closed_[child_cell] == generation_) continue;                        // checked on push too
+    if (isClosed(child_cell)) continue;                                      // checked on push too
     double end_slack = -1.0;
     if (!motionFree(node, motion, vel, obstacles, predict, end_slack, st)) {
       ++st.collisions;
@@ -411,7 +428,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
       // closed meanwhile is dropped unevaluated; otherwise its true h is computed now and it
       // goes back into the queue under its true f (not counted as a pop: the paper's pop is
       // the one that closes or drops it).
-      if (in_box && closed_[cell] == generation_) {
+      if (in_box && isClosed(cell)) {
         ++st.pops;
       } else {
         evaluateLazily(id, best, st);
@@ -420,8 +437,8 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     }
     ++st.pops;
     if (in_box) {
-      if (closed_[cell] == generation_) continue;  // its cell was closed by an earlier pop
-      closed_[cell] = generation_;
+      if (isClosed(cell)) continue;  // its cell was closed by an earlier pop
+      close(cell);
     }
     if (n.h < config_.finish_h) {
       best = id;
