@@ -6,6 +6,7 @@
 #include "planner/distance_field.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -318,62 +319,65 @@ bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVel
                                          const DynamicObstacleSet& obstacles, double t0, double heading_spread,
                                          bool turning) const {
   if (obstacles.size() == 0) return true;
-  // Enough samples that neither the robot nor the fastest obstacle point moves more than a
-  // sample step between two of them (a turning obstacle's corners also sweep round).
-  double fastest = 0.0;
-  for (std::size_t k = 0; k < obstacles.size(); ++k) {
-    double speed = obstacles.velocity(k).norm();
-    if (turning) {
-      const FixedPolygon& o = obstacles.observed(k);
-      speed += std::abs(obstacles.turnRate(k)) * 0.5 * (o.box.max - o.box.min).norm();
-    }
-    fastest = std::max(fastest, speed);
-  }
-  const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
-  for (int k = n; k >= 1; --k) {
-    const double t = dt * k / n;
-    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t, heading_spread, turning)) {
-      return false;
-    }
-  }
-  return true;
+  const NearObstacles near =
+      nearObstacles(from.position(), std::abs(vel.v_mid) * dt, obstacles, t0, dt, heading_spread, turning);
+  return motionFreeDynamic(from, vel, dt, obstacles, t0, near, heading_spread, turning);
 }
 
-std::size_t CollisionChecker::obstaclesNear(const Vec2& p0, double travel, const DynamicObstacleSet& obstacles,
-                                            double t0, double dt, std::span<std::uint32_t> near,
-                                            double& fastest) const {
-  // Obstacle k's centre at time t lies within speed * dt / 2 of its centre at the middle of
-  // the interval (its displacement grows by at most its speed), the robot's origin within
-  // `travel` of p0 (a chord is no longer than its arc); 1 nm covers the rounding of the
-  // samples' own arithmetic.
+CollisionChecker::NearObstacles CollisionChecker::nearObstacles(const Vec2& p0, double travel,
+                                                                const DynamicObstacleSet& obstacles, double t0,
+                                                                double dt, double heading_spread, bool turning) const {
+  // Obstacle k's displacement at time t lies within speed * dt / 2 of its displacement at the
+  // middle of the interval (it grows by at most its speed), the robot's origin within `travel`
+  // of p0 (a chord is no longer than its arc); 1 nm covers the rounding of the samples' own
+  // arithmetic.
   constexpr double kRounding = 1e-9;
-  fastest = 0.0;
-  std::size_t count = 0;
+  NearObstacles near;
   const double tm = t0 + 0.5 * dt;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     const FixedPolygon& o = obstacles.observed(k);
-    const double speed = obstacles.velocity(k).norm();
-    fastest = std::max(fastest, speed);
-    if (count == near.size()) continue;  // no room: the caller checks against all of them
-    const Vec2 center = 0.5 * (o.box.min + o.box.max) + obstacles.displacement(k, tm);
-    const double reach = 0.5 * (o.box.max - o.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
-    const double far = reach + 0.5 * speed * dt + travel + kRounding;
-    if ((center - p0).squaredNorm() <= far * far) near[count++] = static_cast<std::uint32_t>(k);
+    // Enough samples that neither the robot nor the fastest obstacle point moves more than a
+    // sample step between two of them (a turning obstacle's corners also sweep round).
+    const double linear = obstacles.velocity(k).norm();
+    double speed = linear;
+    if (turning) speed += std::abs(obstacles.turnRate(k)) * 0.5 * (o.box.max - o.box.min).norm();
+    near.fastest = std::max(near.fastest, speed);
+    if (k >= kMaskedObstacles) continue;
+    const Vec2 shift = obstacles.displacement(k, tm);
+    const double drift = 0.5 * linear * dt;
+    const double shift_max = shift.norm() + drift;
+    const double base = 0.5 * (o.box.max - o.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
+    const Vec2 seen_center = 0.5 * (o.box.min + o.box.max);
+    // obstacleHits' straight test, its reach at its largest over the interval.
+    const double spread = heading_spread > 0.0 ? heading_spread * shift_max : 0.0;
+    const double far = base + 1.5 * spread + drift + travel + kRounding;
+    bool close = (seen_center + shift - p0).squaredNorm() <= far * far;
+    // Its test on the circle, about where the obstacle was seen.
+    if (!close && turning && obstacles.turnRate(k) != 0.0) {
+      const double circle_far = shift_max + base + travel + kRounding;
+      close = (seen_center - p0).squaredNorm() <= circle_far * circle_far;
+    }
+    if (close) near.mask |= std::uint64_t{1} << k;
   }
-  return count;
+  return near;
 }
 
 bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                                         const DynamicObstacleSet& obstacles, double t0,
-                                         std::span<const std::uint32_t> near, double fastest) const {
-  if (near.empty()) return true;
-  const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
+                                         const DynamicObstacleSet& obstacles, double t0, const NearObstacles& near,
+                                         double heading_spread, bool turning) const {
+  const std::size_t count = obstacles.size();
+  if (count == 0 || (near.mask == 0 && count <= kMaskedObstacles)) return true;
+  const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(near.fastest * dt / sample_step_)));
   for (int k = n; k >= 1; --k) {
     const double t = dt * k / n;
     const Pose2 pose = poseAlongArc(from, vel.v_mid, vel.w_mid, t);
     bool placed = false;
-    for (const std::uint32_t i : near) {
-      if (obstacleHits(i, pose, obstacles, t0 + t, 0.0, false, placed)) return false;
+    for (std::uint64_t m = near.mask; m != 0; m &= m - 1) {
+      const auto i = static_cast<std::size_t>(std::countr_zero(m));
+      if (obstacleHits(i, pose, obstacles, t0 + t, heading_spread, turning, placed)) return false;
+    }
+    for (std::size_t i = kMaskedObstacles; i < count; ++i) {
+      if (obstacleHits(i, pose, obstacles, t0 + t, heading_spread, turning, placed)) return false;
     }
   }
   return true;

@@ -68,19 +68,23 @@ class CollisionChecker {
                          const DynamicObstacleSet& obstacles, double t0, double heading_spread = 0.0,
                          bool turning = false) const;
 
-  // The obstacles that can come near a motion from `p0` over [t0, t0 + dt] on which the robot's
-  // origin travels at most `travel`: every other one fails the bounding-circle test of every
-  // sample of every such motion (motionFreeDynamic without heading spread or turning). Writes
-  // their indices to `near` and returns how many (near.size() when it had no room for them all:
-  // then check against all obstacles); `fastest`
-  // receives the fastest obstacle's speed (all of them: it sets the number of samples).
-  std::size_t obstaclesNear(const Vec2& p0, double travel, const DynamicObstacleSet& obstacles, double t0, double dt,
-                            std::span<std::uint32_t> near, double& fastest) const;
-  // motionFreeDynamic (no heading spread, no turning) against the obstacles obstaclesNear
-  // found for this motion's start: the same samples, the same answer, fewer obstacles.
+  // Which moving obstacles can come near a motion from `p0` over [t0, t0 + dt] on which the
+  // robot's origin travels at most `travel` (heading_spread and turning as poseFreeDynamic):
+  // bit k of `mask` is clear when obstacle k fails the bounding-circle tests of every sample
+  // of every such motion. Obstacles from kMaskedObstacles on have no bit: they are always
+  // checked. `fastest` is the speed that sets motionFreeDynamic's number of samples.
+  static constexpr std::size_t kMaskedObstacles = 64;
+  struct NearObstacles {
+    std::uint64_t mask = 0;
+    double fastest = 0.0;
+  };
+  NearObstacles nearObstacles(const Vec2& p0, double travel, const DynamicObstacleSet& obstacles, double t0, double dt,
+                              double heading_spread = 0.0, bool turning = false) const;
+  // motionFreeDynamic against the obstacles `near` found for a reach that covers this motion
+  // (same heading_spread and turning): the same samples, the same answer, fewer obstacles.
   bool motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
-                         const DynamicObstacleSet& obstacles, double t0, std::span<const std::uint32_t> near,
-                         double fastest) const;
+                         const DynamicObstacleSet& obstacles, double t0, const NearObstacles& near,
+                         double heading_spread = 0.0, bool turning = false) const;
 
   // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3);
   // `beyond` when every edge is at least that far.

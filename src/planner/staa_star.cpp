@@ -42,8 +42,7 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
       actions_(robot.limits, config.notches),
       collision_(robot, local),
       heuristic_(config.heuristic, robot.limits, inflated_static, local, max_obstacles),
-      braking_obstacles_(max_obstacles),
-      near_(max_obstacles) {
+      braking_obstacles_(max_obstacles) {
   braking_obstacles_.setBraking(config_.obstacle_reaction_s, config_.obstacle_brake_decel);
   root_ok_.assign(actions_.size(), 1);
   root_clear_.assign(actions_.size(), 0.0);
@@ -275,11 +274,8 @@ bool StaaStar::motionFree(const Node& node, const ArcMotion& motion, const ArcVe
     const Pose2 end{motion.x1, motion.y1, motion.theta1};
     if (!config_.check_swept) {
       free = collision_.poseFreeDynamic(end, obstacles, t0 + config_.dt);
-    } else if (use_near_) {
-      free = collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0,
-                                          std::span<const std::uint32_t>(near_.data(), near_count_), near_fastest_);
     } else {
-      free = collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0);
+      free = collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0, near_);
     }
   }
   if (timing_) st.collision_ns += now() - tc;
@@ -322,13 +318,11 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
     if (timing_) st.collision_ns += now() - tc;
   }
   // The moving obstacles these motions can come near: the others are not checked per sample.
-  use_near_ = false;
+  near_ = {};
   if (predict && config_.check_swept && obstacles.size() > 0) {
     const double v_lo = 0.5 * (node.s.v + limits_.v_min), v_hi = 0.5 * (node.s.v + limits_.v_max);
     const double travel = std::max(std::abs(v_lo), std::abs(v_hi)) * config_.dt;
-    near_count_ = collision_.obstaclesNear(node.s.position(), travel, obstacles, node.depth * config_.dt, config_.dt,
-                                           near_, near_fastest_);
-    use_near_ = obstacles.size() <= near_.size();  // else some had no room: all are checked
+    near_ = collision_.nearObstacles(node.s.position(), travel, obstacles, node.depth * config_.dt, config_.dt);
   }
   for (std::size_t a = 0; a < actions_.size(); ++a) {
     ++st.successors;

@@ -222,11 +222,8 @@ class StaaStar {
   std::vector<double> root_clear_;           // brakeClearTime after each first action (0: it collides itself)
   std::vector<std::uint8_t> root_allowed_;   // the first actions the search may take
   // Per expansion: the moving obstacles its motions can come near (CollisionChecker::
-  // obstaclesNear), when they were sorted out (use_near_), and the fastest one's speed.
-  std::vector<std::uint32_t> near_;
-  std::size_t near_count_ = 0;
-  bool use_near_ = false;
-  double near_fastest_ = 0.0;
+  // nearObstacles).
+  CollisionChecker::NearObstacles near_;
   bool timing_ = false;
   ClockFn clock_ = &steadyClockNs;  // the current plan's budget's clock
 };
