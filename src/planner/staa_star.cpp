@@ -112,14 +112,24 @@ std::int32_t StaaStar::pop() {
 }
 
 double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const DynamicObstacleSet& obstacles,
-                                bool stand, double heading_spread, bool turning) const {
+                                bool stand, double heading_spread, bool turning, double start_slack,
+                                bool check_static) const {
   constexpr double kClear = std::numeric_limits<double>::infinity();
   const double step = config_.brake_step_s;
   UnicycleState s = from;
   double t = t0;
+  double slack = start_slack;  // the clearance of s, carried along the stop (0: not known)
   for (int k = 0; k < 64 && (std::abs(s.v) > 1e-3 || std::abs(s.w) > 1e-3); ++k) {
     const ArcVelocities vel = arcVelocities(s, brakeAction(s, limits_, step), step, limits_);
-    if (!collision_.motionFreeStatic(s, vel, step)) return t;
+    if (check_static) {
+      const double dth = vel.w_mid * step;
+      const ArcMotion motion = makeArcMotion(s, std::cos(s.theta), std::sin(s.theta), vel.v_mid, vel.w_mid, step,
+                                             std::cos(dth), std::sin(dth));
+      double end_slack = -1.0;
+      if (!collision_.motionFreeStatic(motion, slack, &end_slack)) return t;
+      // Not looked up: the end is within the motion's travel of a start that far from the grid.
+      slack = end_slack >= 0.0 ? end_slack : std::max(0.0, slack - collision_.travelBound(motion));
+    }
     if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t, heading_spread, turning)) return t;
     const Pose2 p = poseAlongArc(s, vel.v_mid, vel.w_mid, step);
     s = UnicycleState{p.x, p.y, p.theta, vel.v_end, vel.w_end};
@@ -148,6 +158,8 @@ double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const Dyna
 
 std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicObstacleSet& obstacles) {
   const double c0 = std::cos(start.theta), s0 = std::sin(start.theta);
+  double start_slack = 0.0;
+  if (!collision_.fastPoseFreeStatic({start.x, start.y, c0, s0}, &start_slack)) start_slack = 0.0;
   std::uint8_t best = 0;
   double latest = -1.0;  // among tier-0 actions: the latest time a collision begins
   for (std::size_t a = 0; a < actions_.size(); ++a) {
@@ -157,15 +169,19 @@ std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicOb
     const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, vel.w_end};
     std::uint8_t tier = 0;
     double clear = 0.0;  // the action itself collides
-    if (collision_.motionFreeStatic(motion) && collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0)) {
-      clear = brakeClearTime(child, config_.dt, braking_obstacles_, true, 0.0, config_.predict_turning);
+    double child_slack = -1.0;
+    if (collision_.motionFreeStatic(motion, start_slack, &child_slack) &&
+        collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0)) {
+      if (child_slack < 0.0) child_slack = std::max(0.0, start_slack - collision_.travelBound(motion));
+      clear = brakeClearTime(child, config_.dt, braking_obstacles_, true, 0.0, config_.predict_turning, child_slack);
       if (std::isinf(clear)) {
         tier = 1;
-        // Passive safety: the same stop against the obstacles at constant velocity.
+        // Passive safety: the same stop against the obstacles at constant velocity (the map
+        // along it was just found clear).
         if (config_.passive_safety &&
             (obstacles.size() == 0 ||
              std::isinf(brakeClearTime(child, config_.dt, obstacles, false, config_.passive_heading_spread,
-                                       config_.predict_turning)))) {
+                                       config_.predict_turning, 0.0, false)))) {
           tier = 2;
         }
       }

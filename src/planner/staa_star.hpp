@@ -165,9 +165,11 @@ class StaaStar {
   // obstacle has stopped: +infinity when it stays free of the map and of `obstacles`, else the
   // time (from the plan's start, to a brake step) at which it first touches something.
   // With `stand` false only the braking is checked. heading_spread and turning: as
-  // CollisionChecker::poseFreeDynamic.
+  // CollisionChecker::poseFreeDynamic. `start_slack`: the clearance of `s` from the grid when
+  // known (0: not known); `check_static` false when this stop is known clear of the grid.
   double brakeClearTime(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand,
-                        double heading_spread = 0.0, bool turning = false) const;
+                        double heading_spread = 0.0, bool turning = false, double start_slack = 0.0,
+                        bool check_static = true) const;
   // Fills root_ok_ with each first action's tier (0..2) from `start`, root_clear_ and
   // root_allowed_ (the best tier's actions, or the least bad ones); returns the best tier any
   // action reached (braking_obstacles_ must hold this cycle's copy).
