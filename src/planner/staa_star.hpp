@@ -26,11 +26,11 @@ namespace staa {
 struct StaaConfig {
   std::size_t notches = 7;          // Eq. (1): n, 49 actions
   double dt = 0.3;                  // prediction time per step (s)
-  // A slow robot (the HSR: 0.5 m/s^2, 1.5 rad/s^2) moves less than a closed-table cell in
+  // A slow robot (the HSR: 0.3 m/s^2, 0.5 rad/s^2) moves less than a closed-table cell in
   // 0.3 s from standstill, and the search cannot tell its first steps apart: dt is raised to
   // the time the robot needs to cross a cell at full acceleration,
   // max(dt, sqrt(2 closed_xy_m / a_max), sqrt(2 closed_theta_rad / b_max)). The paper's
-  // agent (2 m/s^2, 6 rad/s^2) keeps 0.3 s; the HSR gets 0.45 s.
+  // agent (2 m/s^2, 6 rad/s^2) keeps 0.3 s; the HSR gets 0.63 s.
   bool adapt_dt = true;
   double closed_xy_m = 0.05;        // closed table: cell size ...
   double closed_theta_rad = 0.1;    // ... and heading resolution
