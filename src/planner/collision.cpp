@@ -214,11 +214,14 @@ bool CollisionChecker::motionFreeStatic(const UnicycleState& from, const ArcVelo
 
 bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const { return motionFreeStatic(m, 0.0, nullptr); }
 
-bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, double* end_slack) const {
-  // No point of the robot leaves the start pose's clearance: the whole motion is free (every
-  // sample's lookups would say so too; the field is 1-Lipschitz and conservative).
+bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, double* end_slack,
+                                        double start_disc) const {
+  // No point of the robot leaves the start pose's clearance, or the origin stays within the
+  // start's disc clearance: the whole motion is free (every sample's lookups would say so
+  // too; the field is 1-Lipschitz and conservative).
   const double travel = travelBound(m);
-  if (start_slack > 0.0 && travel <= start_slack) {
+  const double origin_travel = std::abs(m.v_mid) * m.dt;
+  if ((start_slack > 0.0 && travel <= start_slack) || (start_disc > 0.0 && origin_travel <= start_disc)) {
     if (end_slack != nullptr) *end_slack = -1.0;
     return true;
   }
@@ -235,6 +238,7 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, 
   // point of the robot moves farther than the travel bound per sample. The start's margin
   // covers the first samples, the end's the last ones.
   const double per_sample = travel / n;
+  const double origin_per_sample = origin_travel / n;
   if (start_slack + end_margin >= travel) return true;
   const double step = m.w_mid * m.dt / n;
   double cs, ss;
@@ -249,6 +253,7 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, 
     c = nc;
     covered -= per_sample;
     if (covered >= 0.0) continue;
+    if (origin_per_sample * k <= start_disc) continue;
     // The rest lies within the end pose's margin.
     if (static_cast<double>(n - k) * per_sample <= end_margin) return true;
     FastPose p{0.0, 0.0, c, sn};

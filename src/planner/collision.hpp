@@ -49,7 +49,16 @@ class CollisionChecker {
   // motion no point of which travels farther is free without a lookup, and the samples within
   // that travel of either end (the end pose's own slack) are not looked up. `end_slack`, when
   // given, receives the end pose's slack, or -1 when the end pose was not looked up.
-  bool motionFreeStatic(const ArcMotion& motion, double start_slack, double* end_slack) const;
+  // `start_disc` (discSlack of the start; 0 when unknown) clears by the origin's travel alone:
+  // every point of the robot stays within the circumradius of the origin, whatever it turns.
+  bool motionFreeStatic(const ArcMotion& motion, double start_slack, double* end_slack, double start_disc = 0.0) const;
+  // How far the robot's origin may move from (x, y), turning as it likes, before the
+  // footprint can touch the grid: the distance field there less the circumradius (0 outside
+  // the grid or when closer).
+  double discSlack(double x, double y) const {
+    const std::ptrdiff_t cell = cellIndex(gridX(x, y), gridY(x, y));
+    return cell < 0 ? 0.0 : std::max(0.0, distance_[static_cast<std::size_t>(cell)] - circumradius_);
+  }
   // The farthest any point of the robot travels along the motion: its bound on how far a
   // clearance margin must reach.
   double travelBound(const ArcMotion& motion) const {

@@ -280,11 +280,12 @@ void StaaStar::rotationsFor(const UnicycleState& s) {
 }
 
 bool StaaStar::motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
-                          const DynamicObstacleSet& obstacles, bool predict, double& end_slack, PlanStats& st) const {
+                          const DynamicObstacleSet& obstacles, bool predict, double disc, double& end_slack,
+                          PlanStats& st) const {
   const double t0 = node.depth * config_.dt;
   const std::int64_t tc = now();
   end_slack = -1.0;
-  bool free = config_.check_swept ? collision_.motionFreeStatic(motion, node.slack, &end_slack)
+  bool free = config_.check_swept ? collision_.motionFreeStatic(motion, node.slack, &end_slack, disc)
                                   : collision_.fastPoseFreeStatic({motion.x1, motion.y1, motion.c1, motion.s1});
   if (free && predict) {
     const Pose2 end{motion.x1, motion.y1, motion.theta1};
@@ -333,6 +334,8 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
     nodes_[static_cast<std::size_t>(id)].slack = slack;
     if (timing_) st.collision_ns += now() - tc;
   }
+  // The pose's clearance in any heading: motions whose origin stays within it are free.
+  const double disc = config_.check_swept ? collision_.discSlack(node.s.x, node.s.y) : 0.0;
   // The moving obstacles these motions can come near: the others are not checked per sample.
   near_ = {};
   if (predict && config_.check_swept && obstacles.size() > 0) {
@@ -354,7 +357,7 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
     if (!closedIndex(child.x, child.y, child.theta, child_cell)) continue;  // outside the local map
     if (isClosed(child_cell)) continue;                                      // checked on push too
     double end_slack = -1.0;
-    if (!motionFree(node, motion, vel, obstacles, predict, end_slack, st)) {
+    if (!motionFree(node, motion, vel, obstacles, predict, disc, end_slack, st)) {
       ++st.collisions;
       continue;
     }

@@ -186,7 +186,8 @@ class StaaStar {
   void expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st);
   void rotationsFor(const UnicycleState& s);
   bool motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
-                  const DynamicObstacleSet& obstacles, bool predict, double& end_slack, PlanStats& st) const;
+                  const DynamicObstacleSet& obstacles, bool predict, double disc, double& end_slack,
+                  PlanStats& st) const;
   double pathCost(const UnicycleState& child, int depth, const DynamicObstacleSet& obstacles, bool predict) const;
   void finish(const UnicycleState& start, std::int32_t best, PlanResult& result);
   // The phase timing's clock reading (the budget's clock), 0 while timing is off.

@@ -363,9 +363,10 @@ bool everySampleFree(const CollisionChecker& checker, const ArcMotion& m) {
   return true;
 }
 
-// The clearance of a motion's start lets whole motions, and samples near either end, go
-// without lookups: the answers must be those of looking up every sample, on real walls, for
-// the paper's agent's 49 motions from many states (near walls and in the open).
+// The clearances of a motion's start (of its footprint, and of a disc of the circumradius about
+// its origin) let whole motions, and samples near either end, go without lookups: the answers
+// must be those of looking up every sample, on real walls, for the paper's agent's 49 motions
+// from many states (near walls and in the open).
 TEST(CollisionChecker, SweptStaticCheckWithEndClearancesAnswersAsEverySampleLookedUp) {
   Walls walls;
   const RobotProfile robot = paperAgentProfile();
@@ -389,7 +390,7 @@ TEST(CollisionChecker, SweptStaticCheckWithEndClearancesAnswersAsEverySampleLook
         const ArcMotion m = makeArcMotion(s, std::cos(s.theta), std::sin(s.theta), vel.v_mid, vel.w_mid, 0.3,
                                           std::cos(dth), std::sin(dth));
         double end_slack = -2.0;
-        const bool fast = checker.motionFreeStatic(m, slack, &end_slack);
+        const bool fast = checker.motionFreeStatic(m, slack, &end_slack, checker.discSlack(s.x, s.y));
         const bool reference = everySampleFree(checker, m);
         ASSERT_EQ(fast, reference) << "state " << s.x << ", " << s.y << ", action " << a;
         EXPECT_EQ(checker.motionFreeStatic(m), reference);
