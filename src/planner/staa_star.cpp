@@ -271,11 +271,17 @@ void StaaStar::evaluateLazily(std::int32_t id, std::int32_t& best, PlanStats& st
 }
 
 void StaaStar::rotationsFor(const UnicycleState& s) {
-  for (std::size_t j = 0; j < actions_.notches(); ++j) {
+  const std::size_t notches = actions_.notches();
+  for (std::size_t j = 0; j < notches; ++j) {
     const ArcVelocities av = arcVelocities(s, actions_[j], config_.dt, limits_);
     rot_w_end_[j] = av.w_end;
     rot_w_mid_[j] = av.w_mid;
     sinCos(av.w_mid * config_.dt, rot_c_[j], rot_s_[j]);
+    // The linear velocities of the actions with linear acceleration index j (arcVelocities
+    // clamps v and w apart, so these are its values for every action of that row).
+    const ArcVelocities lin = arcVelocities(s, actions_[j * notches], config_.dt, limits_);
+    lin_v_end_[j] = lin.v_end;
+    lin_v_mid_[j] = lin.v_mid;
   }
 }
 
@@ -349,8 +355,8 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
       ++st.collisions;  // could not brake safely after it
       continue;
     }
-    const std::size_t j = a % notches;  // actions are ordered (a index) * notches + (b index)
-    const ArcVelocities vel = arcVelocities(node.s, actions_[a], config_.dt, limits_);
+    const std::size_t i = a / notches, j = a % notches;  // actions are ordered (a index) * notches + (b index)
+    const ArcVelocities vel{lin_v_end_[i], rot_w_end_[j], lin_v_mid_[i], rot_w_mid_[j]};
     const ArcMotion motion = makeArcMotion(node.s, c0, s0, vel.v_mid, rot_w_mid_[j], config_.dt, rot_c_[j], rot_s_[j]);
     const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, rot_w_end_[j]};
     std::size_t child_cell = 0;

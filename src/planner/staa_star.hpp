@@ -178,7 +178,7 @@ class StaaStar {
   std::int32_t pop();
   // plan()'s steps: the box, collision grid, heuristic and the root; the first actions'
   // braking check; a lazily queued state's true h; one expansion (its successors, their
-  // rotations, collision check and cost g); the result from the best state.
+  // velocities and rotations, collision check and cost g); the result from the best state.
   void beginSearch(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
                    const Deadline& deadline);
   void restrictRoot(const UnicycleState& start, const DynamicObstacleSet& obstacles, PlanResult& result);
@@ -215,8 +215,9 @@ class StaaStar {
   // CollisionChecker::prepare on why not LocalMap::frameAt).
   double box_x_ = 0.0, box_y_ = 0.0, box_c_ = 1.0, box_s_ = 0.0, box_behind_ = 0.0, box_side_ = 0.0;
   // Per expansion: for each angular acceleration, the end and mid angular velocities and the
-  // cosine and sine of the rotation over dt.
+  // cosine and sine of the rotation over dt; for each linear one, the end and mid velocities.
   std::array<double, ActionSet::kMaxNotches> rot_w_end_{}, rot_w_mid_{}, rot_c_{}, rot_s_{};
+  std::array<double, ActionSet::kMaxNotches> lin_v_end_{}, lin_v_mid_{};
   std::vector<UnicycleState> trajectory_;
   // Braking safety: the obstacles under the braking hypothesis (a copy per plan, no
   // allocation) and which first actions passed.
