@@ -98,6 +98,13 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
   }
   outline_begin_[circle_count_] = m;
   outline_ = sorted;
+  // The distance from each outline point to the next one of its circle's group (robot frame;
+  // a pose moves them rigidly): how far a clearance found at one point reaches along the group.
+  for (std::size_t c = 0; c < circle_count_; ++c) {
+    for (std::size_t q = outline_begin_[c]; q + 1 < outline_begin_[c + 1]; ++q) {
+      outline_gap_[q] = (outline_[q + 1] - outline_[q]).norm();
+    }
+  }
   // Each circle must cover its points (it covers its slab of the bounding box; the nearest
   // centre of points on the box is that slab's): grow it if rounding says otherwise.
   for (std::size_t c = 0; c < circle_count_; ++c) {
@@ -167,11 +174,21 @@ bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) cons
   };
   if (occupiedAt(centroid_)) return false;
   // Only the outline points of the circles that are not clear (a clear circle holds no
-  // occupied cell, so neither do its points).
+  // occupied cell, so neither do its points). A looked-up point's distance field value clears
+  // the points after it within that distance (the field is 1-Lipschitz and conservative).
   for (std::size_t c = 0; c < circle_count_; ++c) {
     if (clear[c]) continue;
+    double covered = -1.0;  // distance still cleared by the last looked-up point
     for (std::size_t k = outline_begin_[c]; k < outline_begin_[c + 1]; ++k) {
-      if (occupiedAt(outline_[k])) return false;
+      if (k > outline_begin_[c]) covered -= outline_gap_[k - 1];
+      if (covered >= 0.0) continue;
+      const Vec2& q = outline_[k];
+      const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
+      covered = -1.0;  // outside the grid: free, but no clearance is claimed
+      if (cell >= 0) {
+        if (grid_[cell] != 0) return false;
+        covered = distance_[static_cast<std::size_t>(cell)];
+      }
     }
   }
   return true;

@@ -153,6 +153,7 @@ class CollisionChecker {
   std::array<Vec2, kMaxOutline> outline_{};
   std::size_t outline_count_ = 0;
   std::array<std::size_t, kMaxCircles + 1> outline_begin_{};  // outline_ grouped by circle
+  std::array<double, kMaxOutline> outline_gap_{};             // to the next point of the group
   Vec2 centroid_{0.0, 0.0};
   std::vector<float> distance_;  // per cell, metres, conservative
   mutable FixedPolygon scratch_;

@@ -411,6 +411,51 @@ TEST(CollisionChecker, SweptStaticCheckWithEndClearancesAnswersAsEverySampleLook
   EXPECT_GT(blocked, motions / 20);
 }
 
+// A pose is free of the grid when none of the footprint's outline points (no two more than a
+// sample step apart) and its centroid lies in an occupied cell; the covering circles and the
+// distance field only save lookups. Poses of the paper's agent all over two rooms' walls,
+// against every outline point and the centroid looked up.
+TEST(CollisionChecker, PoseCheckAnswersAsEveryOutlinePointLookedUp) {
+  Walls walls;
+  const RobotProfile robot = paperAgentProfile();
+  CollisionChecker checker(robot, walls.local.config());
+  const Polygon& fp = checker.footprint();
+  double area = 0.0;
+  Vec2 centroid(0.0, 0.0);
+  for (std::size_t i = 0; i < fp.size(); ++i) {
+    const double cr = cross(fp[i], fp[(i + 1) % fp.size()]);
+    area += cr;
+    centroid += (fp[i] + fp[(i + 1) % fp.size()]) * cr;
+  }
+  centroid /= 3.0 * area;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int blocked = 0, poses = 0;
+  for (int box_pose = 0; box_pose < 10; ++box_pose) {
+    const Pose2 centre{6.0 + 2.0 * u(rng), 6.0 + 2.0 * u(rng), 3.0 * u(rng)};
+    walls.at(centre);
+    checker.prepare(walls.local);
+    for (int k = 0; k < 400; ++k) {
+      // Well inside the box (2 m behind its origin, 6 m ahead, 4 m to each side): every circle's
+      // centre is inside the grid.
+      const Vec2 at = centre.transform({1.75 + 2.75 * u(rng), 3.0 * u(rng)});
+      const Pose2 p{at.x(), at.y(), 3.0 * u(rng)};
+      auto occupied = [&](const Vec2& q) {
+        int i = 0, j = 0;
+        if (!walls.local.cellOf(p.transform(q), i, j)) return false;
+        return walls.local.grid()[static_cast<std::size_t>(j * walls.local.width() + i)] != 0;
+      };
+      bool reference = !occupied(centroid);
+      for (const Vec2& q : checker.outline()) reference = reference && !occupied(q);
+      ASSERT_EQ(checker.poseFreeStatic(p), reference) << "pose " << p.x << ", " << p.y << ", " << p.theta;
+      ++poses;
+      blocked += reference ? 0 : 1;
+    }
+  }
+  EXPECT_GT(blocked, poses / 20);
+  EXPECT_LT(blocked, poses / 2);
+}
+
 // Sorting out the moving obstacles that cannot come near a motion leaves the answer of the
 // swept dynamic check as it was with all of them checked at every sample: people walking
 // and turning around a robot among them, with and without heading spread and the turning
