@@ -20,6 +20,7 @@ done
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libccd-dev libpolyclipping-dev libyaml-cpp-dev
+  libyaml-dev  # libyaml: the YAML reader (src/io/yaml_tree.cpp); yaml-cpp writes
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
   clang-14 libclang-rt-14-dev  # the libFuzzer targets (tests/fuzz, the fuzz preset)
@@ -43,7 +44,7 @@ AARCH64_HOST_PACKAGES=(
 # headers and link files (/usr/aarch64-linux-gnu); the run-time libc and libstdc++ that qemu
 # loads come into the sysroot as dependencies of these.
 SYSROOT_PACKAGES=(
-  libeigen3-dev libccd-dev libpolyclipping-dev libyaml-cpp-dev
+  libeigen3-dev libccd-dev libpolyclipping-dev libyaml-cpp-dev libyaml-dev
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
 )
 SYSROOT="${STAA_AARCH64_SYSROOT:-/opt/staa-sysroot-arm64}"

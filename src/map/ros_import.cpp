@@ -123,7 +123,7 @@ RosMapInfo readRosMapInfo(const io::ConfigValue& root, bool image_must_exist) {
     const std::optional<double> n = yaml_support::readNumber(negate.node());
     if (n && (*n == 0.0 || *n == 1.0)) {
       info.negate = *n == 1.0;
-    } else if (bool on = false; negate.node().IsScalar() && YAML::convert<bool>::decode(negate.node(), on)) {
+    } else if (bool on = false; negate.node().IsScalar() && io::decodeYamlBool(negate.node().Scalar(), on)) {
       info.negate = on;
     } else {
       negate.fail("must be 0 or 1, got " + negate.text());
