@@ -179,6 +179,32 @@ std::variant<Request, std::string> parseDebug(const Json& j) {
   return request;
 }
 
+// The deepest nesting of objects and arrays in `line`, brackets in strings not counted; stops
+// counting past `limit`.
+std::size_t nestingDepth(std::string_view line, std::size_t limit) {
+  std::size_t depth = 0, deepest = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : line) {
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      deepest = std::max(deepest, ++depth);
+      if (deepest > limit) break;
+    } else if ((c == '}' || c == ']') && depth > 0) {
+      --depth;
+    }
+  }
+  return deepest;
+}
+
 }  // namespace
 
 std::variant<Request, std::string> parseRequest(std::string_view line) {
@@ -190,6 +216,9 @@ std::variant<Request, std::string> parseRequest(std::string_view line) {
   }
   if (line.find_first_not_of(" \t") == std::string_view::npos) {
     return std::string(R"(empty request (expected one JSON object per line, e.g. {"cmd": "status"}))");
+  }
+  if (nestingDepth(line, kMaxRequestDepth) > kMaxRequestDepth) {
+    return "nested too deep: at most " + std::to_string(kMaxRequestDepth) + " levels of objects and arrays";
   }
   Json j;
   try {

@@ -35,6 +35,9 @@
 namespace staa::staad {
 
 constexpr std::size_t kMaxRequestBytes = 4096;
+// Objects and arrays nested in one request (a request is one flat object): deeper is refused
+// before the JSON parser sees it.
+constexpr std::size_t kMaxRequestDepth = 8;
 
 // A request, or the reason it is not one (names the field and the value).
 std::variant<Request, std::string> parseRequest(std::string_view line);

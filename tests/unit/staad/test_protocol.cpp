@@ -428,5 +428,25 @@ TEST(Protocol, StatusNamesStallsAndThePlannersBoundBesideTheOtherCauses) {
   EXPECT_TRUE(statusJson(s, 0)["planner"]["budget_ms"].is_null());
 }
 
+
+TEST(Protocol, RequestsNestedEightLevelsParseAndNineAreRefusedNamingTheBound) {
+  const auto nested = [](std::size_t levels) {
+    return R"({"cmd":"status","x":)" + std::string(levels - 1, '[') + "1" + std::string(levels - 1, ']') + "}";
+  };
+  // Eight levels reach the request's own checks (an unknown key), nine stop before parsing.
+  EXPECT_THAT(parsedError(nested(kMaxRequestDepth)), HasSubstr("unknown key \"x\""));
+  EXPECT_EQ(parsedError(nested(kMaxRequestDepth + 1)), "nested too deep: at most 8 levels of objects and arrays");
+  // Brackets inside strings are text, not nesting.
+  EXPECT_THAT(parsedError(R"({"cmd":"[[[[[[[[[[{{{{{{{{{{"})"), HasSubstr("unknown command"));
+}
+
+TEST(Protocol, ARequestOf4096BytesIsReadAnd4097AreRefusedNamingTheBound) {
+  const std::string body = R"({"cmd":"status"})";
+  const std::string inside = std::string(kMaxRequestBytes - body.size(), ' ') + body;
+  ASSERT_EQ(inside.size(), kMaxRequestBytes);
+  EXPECT_TRUE(std::holds_alternative<Request>(parseRequest(inside)));
+  EXPECT_EQ(parsedError(" " + inside), "request too long: 4097 bytes (at most 4096)");
+}
+
 }  // namespace
 }  // namespace staa::staad
