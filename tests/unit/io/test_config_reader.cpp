@@ -256,6 +256,27 @@ TEST(ConfigRules, RangesAndFieldErrorsSayTheRuleUnitAndValue) {
 }
 
 
+// ---- the YAML tree (libyaml) reads as yaml-cpp did ----
+
+TEST(ConfigReaderYaml, NullSpellingsBooleansAliasesAndTheFirstDocument) {
+  const ConfigDocument d = doc("a: ~\nb: null\nc:\nd: \"null\"\ne: ''\nf: NULL\n"
+                               "t: [yes, No, TRUE, off, y, on]\n"
+                               "p: &p [1.5, -2]\nq: *p\n---\nnext: 1\n");
+  const ConfigValue& r = d.root();
+  for (const char* key : {"a", "b", "c", "f"}) EXPECT_FALSE(r.get(key).present()) << key;
+  EXPECT_TRUE(r.get("c").given());
+  EXPECT_EQ(r.get("d").string("a string"), "null");
+  EXPECT_TRUE(r.get("e").present());
+  EXPECT_EQ(r.get("e").string("a string"), "");
+  const ConfigValue t = r.get("t");
+  const bool expected[] = {true, false, true, false, true, true};
+  for (std::size_t i = 0; i < 6; ++i) EXPECT_EQ(t[i].boolean(), expected[i]) << i;
+  EXPECT_EQ(r.get("q").point(), Vec2(1.5, -2.0));
+  // An alias is the node it names (shared, as in yaml-cpp): its line is the anchor's.
+  EXPECT_EQ(r.get("q").line(), 8);
+  EXPECT_FALSE(r.get("next").given());  // only the first document is read
+}
+
 // ---- input bounds (docs/ARCHITECTURE.md, "Input bounds"): one input just inside, one past ----
 
 TEST(ConfigReaderBounds, NestingOf64LevelsReadsAnd65IsRefusedNamingTheBound) {
