@@ -83,6 +83,7 @@ void ControlCycle::setGoal(const Pose2& goal) {
   path_.forgetSearches();
   staa_.planner().forgetSearches();
   searches_fresh_ = true;
+  ++goals_set_;
 }
 
 void ControlCycle::restoreMemory(const Memory& memory) {
