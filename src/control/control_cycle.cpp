@@ -83,7 +83,7 @@ void ControlCycle::setGoal(const Pose2& goal) {
   path_.forgetSearches();
   staa_.planner().forgetSearches();
   searches_fresh_ = true;
-  ++goals_set_;
+  ++goal_changes_;
 }
 
 void ControlCycle::restoreMemory(const Memory& memory) {
@@ -99,6 +99,7 @@ void ControlCycle::clearGoal() {
   state_ = CycleState::kIdle;
   held_valid_ = false;
   path_misses_ = 0;
+  ++goal_changes_;
 }
 
 CycleOutput ControlCycle::stop(const UnicycleState& robot, CycleState state) {

@@ -122,8 +122,8 @@ class ControlCycle {
   void restoreMemory(const Memory& memory);
   // No search has run since the cycle was made or its goal set.
   bool searchesFresh() const { return searches_fresh_; }
-  // How many times setGoal was called (the recorder notes each new goal).
-  std::uint64_t goalsSet() const { return goals_set_; }
+  // How many times setGoal or clearGoal was called (the recorder notes each change).
+  std::uint64_t goalChanges() const { return goal_changes_; }
 
   const LocalMap& localMap() const { return local_; }
   const GlobalPathPlanner& pathPlanner() const { return path_; }
@@ -176,7 +176,7 @@ class ControlCycle {
   bool held_valid_ = false;
   int path_misses_ = 0;
   bool searches_fresh_ = true;
-  std::uint64_t goals_set_ = 0;
+  std::uint64_t goal_changes_ = 0;
 };
 
 }  // namespace staa

@@ -33,8 +33,8 @@ enum class StepKind : std::uint8_t {
 
 // Flags of a cycle record (the byte after `fault`).
 enum CycleFlags : std::uint8_t {
-  kGoalSet = 1 << 0,      // setGoal(memory.goal) before this cycle
-                          // (1 << 1: unused; a cleared goal is in the memory)
+  kGoalSet = 1 << 0,      // the goal was set (setGoal(memory.goal)) or cleared (no goal in
+                          // the memory) before this cycle; 1 << 1 is unused
   kNewCycle = 1 << 2,     // a new ControlCycle (staad: a map swapped in) before this cycle
   kFresh = 1 << 3,        // ControlCycle::searchesFresh() before the step: replays exactly from here
   kInputsCut = 1 << 4,    // inputs beyond the recorder's limits were left out: not replayable

@@ -1,6 +1,7 @@
 #include "record/recorder.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <system_error>
 
@@ -23,8 +24,8 @@ CycleRecorder::CycleRecorder(const RecordLimits& limits, CycleSink& sink, std::u
 PlannerBudget CycleRecorder::before(const ControlCycle& cycle, const BudgetSpec& spec, ClockFn clock) {
   memory_ = cycle.memory();
   fresh_ = cycle.searchesFresh();
-  if (cycle.goalsSet() != goals_set_) flags_ |= kGoalSet;
-  goals_set_ = cycle.goalsSet();
+  if (cycle.goalChanges() != goal_changes_) flags_ |= kGoalSet;
+  goal_changes_ = cycle.goalChanges();
   if (spec.isExpansions()) {
     budget_ = spec.make();
   } else {
@@ -133,21 +134,52 @@ void RecordingService::continuous(std::span<const std::byte> record, std::int64_
   }
 }
 
-bool RecordingService::writeHistory(const std::filesystem::path& file, std::int64_t from_ns, std::string& error) {
-  RecordingFile out(file, session_);
+void RecordingService::collectWrite() {
+  if (!write_) return;
+  const std::string error = write_->error.get();
+  if (error.empty()) {
+    if (write_->fault) {
+      ++stats_.fault_files;
+      stats_.last_fault_file = write_->file.string();
+    }
+  } else {
+    failed(error);
+  }
+  write_.reset();
+}
+
+void RecordingService::finishWrites() { collectWrite(); }
+
+void RecordingService::writeHistory(const std::filesystem::path& file, std::int64_t from_ns, bool fault) {
+  collectWrite();  // one at a time
+  std::vector<std::vector<std::byte>> records;
   for (const Entry& e : history_) {
-    if (e.time_ns >= from_ns) out.add(e.bytes);
+    if (e.time_ns >= from_ns) records.push_back(e.bytes);
   }
-  out.close();
-  if (!out.ok()) {
-    error = out.error();
-    return false;
-  }
-  return true;
+  write_.emplace();
+  write_->file = file;
+  write_->fault = fault;
+  write_->error = std::async(std::launch::async, [file, session = session_, records = std::move(records)]() -> std::string {
+    std::error_code ec;
+    if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ec);
+    std::filesystem::path part = file;
+    part += ".part";
+    RecordingFile out(part, session);
+    for (const std::vector<std::byte>& r : records) out.add(r);
+    out.close();
+    if (!out.ok()) {
+      std::filesystem::remove(part, ec);
+      return out.error();
+    }
+    std::filesystem::rename(part, file, ec);
+    if (ec) return file.string() + ": cannot be written (" + ec.message() + ")";
+    return {};
+  });
 }
 
 void RecordingService::take(std::span<const std::byte> record) {
   ++stats_.cycles;
+  if (write_ && write_->error.wait_for(std::chrono::seconds(0)) == std::future_status::ready) collectWrite();
   CycleRecord c;
   try {
     c = decodeCycle(record, "recorder ring");
@@ -174,26 +206,19 @@ void RecordingService::take(std::span<const std::byte> record) {
 
 void RecordingService::writeFaultFile() {
   const std::filesystem::path file = options_.fault_dir / ("staad-fault-" + compactUtcNow() + "-" + fault_kind_ + ".mcap");
-  std::string error;
-  if (writeHistory(file, *fault_at_ - static_cast<std::int64_t>(options_.seconds * 1e9), error)) {
-    ++stats_.fault_files;
-    stats_.last_fault_file = file.string();
-  } else {
-    failed(error);
-  }
+  writeHistory(file, *fault_at_ - static_cast<std::int64_t>(options_.seconds * 1e9), true);
   fault_at_.reset();
 }
 
 std::string RecordingService::save(const std::filesystem::path& file) {
   if (history_.empty()) return "no cycle recorded yet";
-  std::string error;
-  const std::int64_t from = history_.back().time_ns - static_cast<std::int64_t>(options_.seconds * 1e9);
-  if (!writeHistory(file, from, error)) return error;
+  writeHistory(file, history_.back().time_ns - static_cast<std::int64_t>(options_.seconds * 1e9), false);
   return {};
 }
 
 void RecordingService::close() {
   if (fault_at_) writeFaultFile();
+  collectWrite();
   if (file_) {
     file_->close();
     if (!file_->ok()) failed(file_->error());

@@ -11,8 +11,10 @@
 // ring, keeps the last `seconds` of them, writes them to rotating files (`recorder.path`,
 // at most `max_file_mb` each, the oldest deleted beyond `max_files`), saves the history on
 // demand (`staactl record save FILE`) and on a fault (the seconds before it and
-// `fault_after_s` after, into `fault_dir`). A file it cannot write (full disk, unwritable
-// folder) is a warning in the log; the control thread never waits for it.
+// `fault_after_s` after, into `fault_dir`). Saves and fault files are written by a worker
+// thread from a copy of the history (FILE.part, renamed when complete), so that the service
+// thread keeps answering the socket. A file it cannot write (full disk, unwritable folder)
+// is a warning in the log; the control thread never waits for any of it.
 
 #include "control/control_cycle.hpp"
 #include "record/budget_tap.hpp"
@@ -24,6 +26,7 @@
 #include <deque>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <span>
@@ -72,7 +75,7 @@ class CycleRecorder {
   std::uint64_t cycle_ = 0;
   std::uint64_t failed_ = 0;
   std::uint8_t flags_ = 0;
-  std::uint64_t goals_set_ = 0;  // ControlCycle::goalsSet() at the last record
+  std::uint64_t goal_changes_ = 0;  // ControlCycle::goalChanges() at the last record
   ControlCycle::Memory memory_;
   bool fresh_ = false;
   PlannerBudget budget_;
@@ -119,13 +122,17 @@ class RecordingService {
 
   // One encoded cycle from the ring.
   void take(std::span<const std::byte> record);
-  // The history (the last `seconds`) into `file`; the error, or empty when written.
+  // The history (the last `seconds`) into `file`, written in the background (a save still
+  // being written is finished first); the error (nothing recorded yet), or empty.
   std::string save(const std::filesystem::path& file);
+  // Waits for a file being written in the background.
+  void finishWrites();
   // Finishes the files (a pending fault file with what it has).
   void close();
 
   const RecorderStats& stats() const { return stats_; }
   const Session& session() const { return session_; }
+  const RecorderOptions& options() const { return options_; }
 
  private:
   struct Entry {
@@ -133,7 +140,9 @@ class RecordingService {
     std::vector<std::byte> bytes;
   };
   void continuous(std::span<const std::byte> record, std::int64_t time_ns);
-  bool writeHistory(const std::filesystem::path& file, std::int64_t from_ns, std::string& error);
+  // Starts writing the history from `from_ns` into `file` on the worker thread.
+  void writeHistory(const std::filesystem::path& file, std::int64_t from_ns, bool fault);
+  void collectWrite();  // the worker's result, once it is done
   void failed(const std::string& what);
   void writeFaultFile();
   std::filesystem::path nextContinuousPath();
@@ -151,6 +160,12 @@ class RecordingService {
   std::uint64_t file_index_ = 0;
   RecorderStats stats_;
   bool failing_ = false;
+  struct Write {
+    std::filesystem::path file;
+    bool fault = false;
+    std::future<std::string> error;  // empty: written
+  };
+  std::optional<Write> write_;
 };
 
 }  // namespace staa::record

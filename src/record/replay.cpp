@@ -27,10 +27,6 @@ Recording loadRecording(const std::filesystem::path& path, bool salvage) {
     const McapChannel& ch = file.channels.at(m.channel_id);
     if (ch.message_encoding == kCycleEncoding) {
       CycleRecord c = decodeCycle(m.data, source + ": " + ch.topic + " message " + std::to_string(m.sequence));
-      if (c.map_sequence != 0) {
-        throw RecordError(source + ": cycle " + std::to_string(c.cycle) + " ran on map " + std::to_string(c.map_sequence) +
-                          " (a map swapped in from ROS), which this file does not hold: only the session's map replays");
-      }
       if (first || c.time_ns < r.first_time_ns) r.first_time_ns = c.time_ns;
       first = false;
       std::vector<CycleRecord>& cycles = r.agents[c.agent];
@@ -147,17 +143,35 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options,
     ar.agent = agent;
     double distance_sum = 0.0;
     bool exact = false;
+    auto tally = [&ar](const CycleRecord& r, double t, bool is_exact, const std::string& difference) {
+      if (difference.empty()) {
+        is_exact ? ++ar.identical : ++ar.best_effort_identical;
+        return;
+      }
+      ++ar.differing;
+      if (!ar.first_difference_cycle) {
+        ar.first_difference_cycle = r.cycle;
+        ar.first_difference_t = t;
+        ar.first_difference = difference;
+      }
+    };
     for (const CycleRecord& r : cycles) {
       const double t = static_cast<double>(r.time_ns - recording.first_time_ns) * 1e-9;
       if (options.from_s && t < *options.from_s - 1e-9) continue;
       if (options.to_s && t > *options.to_s + 1e-9) break;
       if (options.until_cycle && r.cycle > *options.until_cycle) break;
 
+      if (r.map_sequence != 0) {
+        // A map from ROS swapped in: the file holds the session's map only.
+        ++ar.other_map;
+        exact = false;
+        continue;
+      }
       if (r.flags & kNewCycle) {
         cycle = std::make_unique<ControlCycle>(session.map, session.robot, config);
         cycle->setLocalController(controller.get());
       }
-      if (r.flags & kGoalSet) cycle->setGoal(r.goal);
+      if (r.flags & kGoalSet) r.has_goal ? cycle->setGoal(r.goal) : cycle->clearGoal();
       if ((r.flags & kFresh) && !changed) {
         if (!exact && !ar.exact_from) ar.exact_from = r.cycle;
         exact = true;
@@ -170,7 +184,7 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options,
 
       if (!r.stepped()) {
         ++ar.held;
-        if (difference.empty()) exact ? ++ar.identical : ++ar.best_effort_identical;
+        tally(r, t, exact, difference);
         if (each) each(ReplayedCycle{r, nullptr, *cycle, *cycle, obstacles, exact, difference});
         continue;
       }
@@ -211,15 +225,8 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options,
       const bool followed = out.state == CycleState::kDriving && (out.path_status == PathStatus::kFound || out.path_held);
       if (difference.empty() && followed) difference = routeDifference(r.route, cycle->lastPath());
 
-      if (difference.empty()) {
-        exact ? ++ar.identical : ++ar.best_effort_identical;
-      } else {
-        ++ar.differing;
-        if (!ar.first_difference_cycle) {
-          ar.first_difference_cycle = r.cycle;
-          ar.first_difference_t = t;
-          ar.first_difference = difference;
-        }
+      tally(r, t, exact, difference);
+      if (!difference.empty()) {
         ar.max_command_change =
             std::max(ar.max_command_change, std::abs(r.out.v_cmd - out.v_cmd) + std::abs(r.out.w_cmd - out.w_cmd));
         const double d = planDistance(r.trajectory, out.planned ? out.plan.trajectory : std::span<const UnicycleState>{});

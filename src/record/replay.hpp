@@ -47,8 +47,8 @@ struct Recording {
 };
 
 // Throws McapError (not MCAP, truncated, another version) or RecordError (no session, a bad
-// cycle record, a map that does not match its checksum or a cycle on a map the file does not
-// hold). `salvage`: a truncated file yields its complete cycles.
+// cycle record, a map that does not match its checksum). `salvage`: a truncated file yields
+// its complete cycles.
 Recording loadRecording(const std::filesystem::path& path, bool salvage = false);
 
 struct ReplayOptions {
@@ -81,6 +81,7 @@ struct AgentReplay {
   std::uint64_t identical = 0;   // of the exact ones, identical
   std::uint64_t best_effort_identical = 0;  // of the others, identical
   std::uint64_t held = 0;        // not stepped by staad (fault, stop): nothing to rerun
+  std::uint64_t other_map = 0;   // on a map swapped in from ROS, which the file does not hold: not rerun
   std::optional<std::uint64_t> exact_from;  // the first fresh cycle
   std::optional<std::uint64_t> first_difference_cycle;
   double first_difference_t = 0.0;
@@ -98,9 +99,9 @@ struct ReplayResult {
   double seconds = 0.0;         // wall time of the rerun
 };
 
-// Reruns the selected cycles; `each` (may be empty) sees every one. Throws RecordError for
-// what the recording cannot do (a cycle on a map sequence it does not hold) and
-// std::invalid_argument for a configuration the control cycle refuses.
+// Reruns the selected cycles; `each` (may be empty) sees every one (but those on a map the
+// file does not hold). Throws std::invalid_argument for a configuration the control cycle
+// refuses.
 ReplayResult replay(const Recording& recording, const ReplayOptions& options,
                     const std::function<void(const ReplayedCycle&)>& each = {});
 

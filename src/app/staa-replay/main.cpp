@@ -251,25 +251,44 @@ int run(int argc, char** argv) {
   });
   if (svg_error) throw InputError(*svg_error);
 
-  std::cout << result.cycles << " cycles, " << result.identical << " identical\n";
   const double speed = result.seconds > 0.0 ? static_cast<double>(result.cycles) / result.seconds : 0.0;
   bool all_exact_identical = true;
+  if (!a.sets.empty()) {
+    std::string sets;
+    for (const std::string& s : a.sets) sets += (sets.empty() ? "" : ", ") + s;
+    std::cout << result.cycles << " cycles rerun with " << sets << ": " << (result.cycles - result.identical)
+              << " changed (open loop: the robot moves as recorded, only what the cycles decide changes)\n";
+  } else {
+    std::cout << result.cycles << " cycles, " << result.identical << " identical\n";
+  }
   for (const rec::AgentReplay& ar : result.agents) {
     std::string line = "  agent " + std::to_string(ar.agent) + ": " + std::to_string(ar.cycles) + " cycles";
+    if (!a.sets.empty()) {
+      if (ar.first_difference_cycle) {
+        line += "; first change at cycle " + std::to_string(*ar.first_difference_cycle) + " (t = " +
+                fmt(ar.first_difference_t, 2) + " s): " + ar.first_difference + "; " + std::to_string(ar.differing) +
+                " cycles changed, commands by up to " + fmt(ar.max_command_change, 3) +
+                " (|dv| m/s + |dw| rad/s), plans apart by up to " + fmt(ar.max_path_distance_m, 3) + " m (mean " +
+                fmt(ar.mean_path_distance_m, 3) + " m)";
+      } else {
+        line += ", none changed";
+      }
+      std::cout << line << '\n';
+      continue;
+    }
     if (ar.exact_from) line += ", exact from cycle " + std::to_string(*ar.exact_from);
     if (ar.exact < ar.cycles) {
       line += ", " + std::to_string(ar.cycles - ar.exact) + " before it rerun best effort (" +
               std::to_string(ar.best_effort_identical) + " identical)";
     }
     if (ar.held > 0) line += ", " + std::to_string(ar.held) + " held by staad without a step";
+    if (ar.other_map > 0) {
+      line += ", " + std::to_string(ar.other_map) + " on a map swapped in from ROS that the file does not hold (not rerun)";
+    }
     if (ar.first_difference_cycle) {
       line += "; first difference at cycle " + std::to_string(*ar.first_difference_cycle) + " (t = " +
               fmt(ar.first_difference_t, 2) + " s): " + ar.first_difference + "; " + std::to_string(ar.differing) +
               " cycles differ";
-      if (!a.sets.empty()) {
-        line += ", commands by up to " + fmt(ar.max_command_change, 3) + " (|dv| + |dw|), plans apart by up to " +
-                fmt(ar.max_path_distance_m, 3) + " m (mean " + fmt(ar.mean_path_distance_m, 3) + " m)";
-      }
     }
     std::cout << line << '\n';
     // --check fails on an exact cycle that differs; best-effort ones only count when nothing is exact.
@@ -282,7 +301,6 @@ int run(int argc, char** argv) {
   }
   std::cerr << "staa-replay: " << result.cycles << " cycles in " << fmt(result.seconds, 2) << " s (" << fmt(speed, 0)
             << " cycles/s)\n";
-  if (!a.sets.empty()) std::cout << "  (open loop: the robot moves as recorded; --set changes only what the cycles decide)\n";
   for (const std::string& line : caption) std::cout << line << '\n';
 
   if (json_out.is_open()) {
@@ -301,7 +319,7 @@ int run(int argc, char** argv) {
     json_out.close();
     if (!json_out) throw InputError("--json: cannot write '" + a.json + "'");
   }
-  if (a.check && !all_exact_identical) return kExitDifferent;
+  if (a.check && (!all_exact_identical || (!a.sets.empty() && result.identical != result.cycles))) return kExitDifferent;
   return 0;
 }
 
