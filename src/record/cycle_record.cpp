@@ -168,7 +168,7 @@ std::size_t maxCycleBytes(const RecordLimits& l) {
   const std::size_t obstacles = 4 + l.obstacles * (4 + l.vertices * 16 + 24);
   const std::size_t held = 4 + l.path_points * 16;
   const std::size_t out = kOutputBytes + 24 + 2 * (16 + 1) + 24 + 1;
-  const std::size_t plot = 4 + l.path_points * 16 + 4 + l.trajectory * 40;
+  const std::size_t plot = 4 + l.path_points * 16 + 4 + l.trajectory * 20;
   return header + memory + robot + budget + obstacles + held + out + plot;
 }
 
@@ -322,7 +322,10 @@ std::size_t encodeCycle(const CycleView& v, const RecordLimits& limits, std::spa
       v.out != nullptr && v.out->planned ? v.out->plan.trajectory : std::span<const UnicycleState>{};
   const std::size_t nt = std::min(traj.size(), limits.trajectory);
   w.u32(static_cast<std::uint32_t>(nt));
-  for (std::size_t i = 0; i < nt; ++i) w.state(traj[i]);
+  // For the plots only (never compared): single precision, half the bytes of the record's bulk.
+  for (std::size_t i = 0; i < nt; ++i) {
+    for (const double x : {traj[i].x, traj[i].y, traj[i].theta, traj[i].v, traj[i].w}) w.put(static_cast<float>(x));
+  }
   return w.overflow() ? 0 : w.size();
 }
 
@@ -403,9 +406,15 @@ CycleRecord decodeCycle(std::span<const std::byte> data, const std::string& wher
   c.subgoal = r.pose("subgoal");
   c.subgoal_final = r.u8("subgoal_final") != 0;
   c.route = r.points("route");
-  const std::uint32_t nt = r.count("trajectory", 40);
+  const std::uint32_t nt = r.count("trajectory", 20);
   c.trajectory.resize(nt);
-  for (UnicycleState& s : c.trajectory) s = r.state("trajectory");
+  for (UnicycleState& s : c.trajectory) {
+    s.x = r.get<float>("trajectory");
+    s.y = r.get<float>("trajectory");
+    s.theta = r.get<float>("trajectory");
+    s.v = r.get<float>("trajectory");
+    s.w = r.get<float>("trajectory");
+  }
   if (r.left() != 0) {
     throw RecordError(where + ": " + std::to_string(r.left()) + " bytes after the end of the cycle record");
   }

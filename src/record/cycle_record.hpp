@@ -153,7 +153,7 @@ struct CycleRecord {
   Pose2 subgoal;
   bool subgoal_final = false;
   Polygon route;
-  std::vector<UnicycleState> trajectory;
+  std::vector<UnicycleState> trajectory;  // single precision in the record (plots only)
 
   bool stepped() const { return step == StepKind::kStepped; }
   ControlCycle::Memory memory() const;  // its held_path views this record

@@ -25,6 +25,7 @@ Recording loadRecording(const std::filesystem::path& path, bool salvage) {
   bool first = true;
   for (const McapMessage& m : file.messages) {
     const McapChannel& ch = file.channels.at(m.channel_id);
+    (ch.message_encoding == kCycleEncoding ? r.cycle_bytes : r.json_bytes) += m.data.size();
     if (ch.message_encoding == kCycleEncoding) {
       CycleRecord c = decodeCycle(m.data, source + ": " + ch.topic + " message " + std::to_string(m.sequence));
       if (first || c.time_ns < r.first_time_ns) r.first_time_ns = c.time_ns;

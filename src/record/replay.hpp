@@ -43,7 +43,9 @@ struct Recording {
   std::vector<RecordedEvent> events;                         // contacts (multi-agent runs)
   bool truncated = false;
   std::int64_t first_time_ns = 0;  // the earliest cycle of the file (--from and --to count from it)
-  std::uint64_t bytes = 0;
+  std::uint64_t bytes = 0;        // the file
+  std::uint64_t cycle_bytes = 0;  // the x-staa-cycle messages' data
+  std::uint64_t json_bytes = 0;   // the plotted channels' data
 };
 
 // Throws McapError (not MCAP, truncated, another version) or RecordError (no session, a bad

@@ -106,6 +106,18 @@ std::string describeFile(const rec::Recording& r) {
            "\n";
   }
   if (!r.events.empty()) out += "  " + std::to_string(r.events.size()) + " events (" + r.events.front().topic + ", ...)\n";
+  std::uint64_t cycles = 0;
+  double seconds = 0.0;
+  for (const auto& [agent, c] : r.agents) {
+    cycles += c.size();
+    seconds = std::max(seconds, static_cast<double>(c.back().time_ns - r.first_time_ns) * 1e-9 + 1.0 / s.control.rate_hz);
+  }
+  if (cycles > 0 && seconds > 0.0) {
+    const double n = static_cast<double>(cycles);
+    out += "  " + fmt(static_cast<double>(r.bytes) / n, 0) + " bytes per cycle (cycle channel " +
+           fmt(static_cast<double>(r.cycle_bytes) / n, 0) + ", JSON channels " + fmt(static_cast<double>(r.json_bytes) / n, 0) +
+           "), " + fmt(static_cast<double>(r.bytes) / seconds * 60.0 / 1e6, 2) + " MB per minute\n";
+  }
   return out;
 }
 

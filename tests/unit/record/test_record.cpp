@@ -190,7 +190,8 @@ TEST(CycleRecord, EncodesARealCycleAndDecodesEveryFieldBack) {
   EXPECT_EQ(firstDifference(c.out, stepOutputs(out)), "");
   EXPECT_EQ(c.out.pops, out.plan.stats.pops);
   EXPECT_EQ(c.route.size(), oc.cycle->lastPath().size());
-  EXPECT_EQ(c.trajectory.size(), out.plan.trajectory.size());
+  ASSERT_EQ(c.trajectory.size(), out.plan.trajectory.size());
+  EXPECT_EQ(c.trajectory.back().x, static_cast<float>(out.plan.trajectory.back().x)) << "single precision";
   EXPECT_EQ(c.command.next_w, 0.2);
   EXPECT_FALSE(c.budget.wall_clock);
   EXPECT_EQ(c.budget.max_pops, 300u);
