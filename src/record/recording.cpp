@@ -9,11 +9,10 @@
 #include <cstdio>
 #include <ctime>
 
+#include "git_revision.hpp"  // STAA_GIT_REVISION, written at build time
+
 #ifndef STAA_VERSION
 #define STAA_VERSION "unknown"
-#endif
-#ifndef STAA_GIT_REVISION
-#define STAA_GIT_REVISION ""
 #endif
 #ifndef STAA_BUILD_TYPE
 #define STAA_BUILD_TYPE ""
