@@ -52,12 +52,13 @@ std::string searchWords(const CycleRecord& c) {
 
 std::string safetyWords(const StepOutputs& o) {
   switch (o.tier) {
-    case 2: return "passive safety holds: it can brake to a stop before any moving obstacle reaches its path";
+    case 2: return "passive safety holds (it can stop before any moving obstacle reaches its path)";
     case 1:
-      return format("braking safety: no first action keeps passive safety; %u brake before the obstacles, braking too",
+      return format("braking safety, tier 1: no first action keeps passive safety; %u let it stop clear if the "
+                    "obstacles brake too",
                     o.brake_safe_actions);
     default:
-      return format("braking safety: no first action can brake clear; the least bad %u allowed (latest contact)",
+      return format("braking safety, tier 0: no first action lets it stop clear; the %u least bad allowed (latest contact)",
                     o.brake_safe_actions);
   }
 }
