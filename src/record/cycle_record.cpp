@@ -253,7 +253,7 @@ std::string firstDifference(const StepOutputs& r, const StepOutputs& p) {
 
 std::size_t encodeCycle(const CycleView& v, const RecordLimits& limits, std::span<std::byte> buffer) {
   Writer w(buffer);
-  std::uint8_t flags = v.flags & (kGoalSet | kNewCycle);
+  std::uint8_t flags = v.flags & (kGoalSet | kPoseCorrected | kNewCycle);
   if (v.fresh) flags |= kFresh;
   const std::size_t n_obstacles = v.obstacles.polygons.size();
   bool cut = n_obstacles > limits.obstacles;

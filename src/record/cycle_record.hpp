@@ -34,7 +34,9 @@ enum class StepKind : std::uint8_t {
 // Flags of a cycle record (the byte after `fault`).
 enum CycleFlags : std::uint8_t {
   kGoalSet = 1 << 0,      // the goal was set (setGoal(memory.goal)) or cleared (no goal in
-                          // the memory) before this cycle; 1 << 1 is unused
+                          // the memory) before this cycle
+  kPoseCorrected = 1 << 1,  // staad: a pose correction (staactl pose) was handed to the base
+                            // before this cycle (the robot state shows its effect)
   kNewCycle = 1 << 2,     // a new ControlCycle (staad: a map swapped in) before this cycle
   kFresh = 1 << 3,        // ControlCycle::searchesFresh() before the step: replays exactly from here
   kInputsCut = 1 << 4,    // inputs beyond the recorder's limits were left out: not replayable
@@ -81,7 +83,7 @@ struct CycleView {
   std::uint32_t map_sequence = 0;
   StepKind step = StepKind::kStepped;
   std::uint8_t fault = 0;
-  std::uint8_t flags = 0;  // kGoalSet, kNewCycle; kFresh, kInputsCut and kHeldPath are set by encodeCycle
+  std::uint8_t flags = 0;  // kGoalSet, kPoseCorrected, kNewCycle; kFresh, kInputsCut, kHeldPath: encodeCycle's
   ControlCycle::Memory memory;  // before the step
   bool fresh = false;           // searchesFresh() before the step
   UnicycleState robot;

@@ -44,6 +44,23 @@ void putString(std::vector<std::byte>& b, const std::string& s) {
   const auto* p = reinterpret_cast<const std::byte*>(s.data());
   b.insert(b.end(), p, p + s.size());
 }
+void putMap(std::vector<std::byte>& b, const KeyValues& kv);
+
+// A Schema's and a Channel's record content (the data section's and the summary's copy).
+void putSchema(std::vector<std::byte>& b, const McapSchema& s) {
+  putU16(b, s.id);
+  putString(b, s.name);
+  putString(b, s.encoding);
+  putString(b, s.data);  // uint32 length-prefixed bytes
+}
+void putChannel(std::vector<std::byte>& b, const McapChannel& c) {
+  putU16(b, c.id);
+  putU16(b, c.schema_id);
+  putString(b, c.topic);
+  putString(b, c.message_encoding);
+  putMap(b, c.metadata);
+}
+
 void putMap(std::vector<std::byte>& b, const KeyValues& kv) {
   std::vector<std::byte> inner;
   for (const auto& [k, v] : kv) {
@@ -164,10 +181,7 @@ bool McapWriter::ok() const { return out_.good(); }
 std::uint16_t McapWriter::addSchema(const std::string& name, const std::string& encoding, const std::string& data) {
   McapSchema s{static_cast<std::uint16_t>(schemas_.size() + 1), name, encoding, data};
   body_.clear();
-  putU16(body_, s.id);
-  putString(body_, s.name);
-  putString(body_, s.encoding);
-  putString(body_, s.data);  // uint32 length-prefixed bytes
+  putSchema(body_, s);
   record(kSchema, body_);
   schemas_.push_back(std::move(s));
   return schemas_.back().id;
@@ -177,11 +191,7 @@ std::uint16_t McapWriter::addChannel(std::uint16_t schema_id, const std::string&
                                      const std::string& message_encoding, const KeyValues& metadata) {
   McapChannel c{static_cast<std::uint16_t>(channels_.size() + 1), schema_id, topic, message_encoding, metadata};
   body_.clear();
-  putU16(body_, c.id);
-  putU16(body_, c.schema_id);
-  putString(body_, c.topic);
-  putString(body_, c.message_encoding);
-  putMap(body_, c.metadata);
+  putChannel(body_, c);
   record(kChannel, body_);
   channel_counts_[c.id] = 0;
   channels_.push_back(std::move(c));
@@ -237,21 +247,14 @@ void McapWriter::close() {
   group(kSchema, [&] {
     for (const McapSchema& s : schemas_) {
       body_.clear();
-      putU16(body_, s.id);
-      putString(body_, s.name);
-      putString(body_, s.encoding);
-      putString(body_, s.data);
+      putSchema(body_, s);
       record(kSchema, body_);
     }
   });
   group(kChannel, [&] {
     for (const McapChannel& c : channels_) {
       body_.clear();
-      putU16(body_, c.id);
-      putU16(body_, c.schema_id);
-      putString(body_, c.topic);
-      putString(body_, c.message_encoding);
-      putMap(body_, c.metadata);
+      putChannel(body_, c);
       record(kChannel, body_);
     }
   });

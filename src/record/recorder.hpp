@@ -49,6 +49,8 @@ class CycleRecorder {
 
   // A new ControlCycle from the next step on (staad: a map swapped in).
   void newCycle() { flags_ |= kNewCycle; }
+  // A pose correction handed to the base before the next step.
+  void poseCorrected() { flags_ |= kPoseCorrected; }
 
   // Before the step: notes the cycle's memory (and a goal set since the last record) and
   // returns `budget` with its clock tapped

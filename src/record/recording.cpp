@@ -229,6 +229,7 @@ std::vector<std::pair<std::string, std::string>> cycleJson(const CycleRecord& c)
                                  {"outcome", c.out.planned ? toString(c.out.outcome) : "none"},
                                  {"tier", c.out.planned ? c.out.tier : -1},
                                  {"fresh", (c.flags & kFresh) != 0},
+                                 {"pose_corrected", (c.flags & kPoseCorrected) != 0},
                                  {"goal", goal}}
                                 .dump());
   json traj = json::array();

@@ -307,8 +307,8 @@ int run(int argc, char** argv) {
     if (ar.exact != ar.identical) all_exact_identical = false;
     if (ar.exact == 0 && ar.differing > 0) all_exact_identical = false;
     if (ar.exact == 0 && ar.cycles > ar.held) {
-      std::cout << "  (agent " << ar.agent << ": no cycle replays exactly: the file starts in the middle of a drive and "
-                   "holds no new goal)\n";
+      std::cout << "  (agent " << ar.agent << ": no cycle replays exactly: the cycles rerun start in the middle of a "
+                   "drive and hold no new goal)\n";
     }
   }
   std::cerr << "staa-replay: " << result.cycles << " cycles in " << fmt(result.seconds, 2) << " s (" << fmt(speed, 0)

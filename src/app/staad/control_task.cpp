@@ -187,7 +187,11 @@ void ControlTask::takeRequests(rt::Nanos now) {
         break;
       case RequestKind::kPose:
         // Only the base thread may call Base::setPose.
-        if (!ch_.poses.push(request.pose)) log(now, rt::LogLevel::kWarning, "pose request dropped: the base thread's ring is full");
+        if (!ch_.poses.push(request.pose)) {
+          log(now, rt::LogLevel::kWarning, "pose request dropped: the base thread's ring is full");
+        } else if (recorder_) {
+          recorder_->poseCorrected();
+        }
         break;
       case RequestKind::kStatus:  // answered by the service thread itself
       case RequestKind::kHistograms:

@@ -619,6 +619,10 @@ TEST(ControlTask, TheFlightRecorderAllocatesNothingAndItsCyclesReplayBitForBit) 
   const auto goals = std::count_if(cycles.begin(), cycles.end(),
                                    [](const record::CycleRecord& c) { return (c.flags & record::kGoalSet) != 0; });
   EXPECT_EQ(goals, 4) << "three goals and the stop's clearing";
+  const auto corrections = std::count_if(cycles.begin(), cycles.end(), [](const record::CycleRecord& c) {
+    return (c.flags & record::kPoseCorrected) != 0;
+  });
+  EXPECT_EQ(corrections, 1) << "the pose correction is in the cycle after it";
   const record::ReplayResult replayed = record::replay(recording, {});
   EXPECT_EQ(replayed.cycles, records);
   EXPECT_EQ(replayed.identical, records) << replayed.agents[0].first_difference;
