@@ -270,7 +270,7 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, 
     c = nc;
     covered -= per_sample;
     if (covered >= 0.0) continue;
-    if (origin_per_sample * k <= start_disc) continue;
+    if (start_disc > 0.0 && origin_per_sample * k <= start_disc) continue;
     // The rest lies within the end pose's margin.
     if (static_cast<double>(n - k) * per_sample <= end_margin) return true;
     FastPose p{0.0, 0.0, c, sn};

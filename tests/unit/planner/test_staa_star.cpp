@@ -374,14 +374,16 @@ TEST(CollisionChecker, SweptStaticCheckWithEndClearancesAnswersAsEverySampleLook
   const ActionSet actions(robot.limits, 7);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  int shortcut = 0, blocked = 0, motions = 0;
+  int shortcut = 0, blocked = 0, motions = 0, turns_in_walls = 0;
   for (int pose = 0; pose < 12; ++pose) {
     const Pose2 centre{6.0 + 2.0 * u(rng), 6.0 + 2.0 * u(rng), 3.0 * u(rng)};
     walls.at(centre);
     checker.prepare(walls.local);
     for (int k = 0; k < 40; ++k) {
-      const UnicycleState s{centre.x + 2.0 * u(rng), centre.y + 2.0 * u(rng), 3.0 * u(rng), 1.5 + 0.5 * u(rng),
-                            3.0 * u(rng)};
+      // Every other state stands, so that some motions turn on the spot (the origin does not
+      // move: the disc clearance clears them only when there is one).
+      const double v = k % 2 == 0 ? 0.0 : 1.5 + 0.5 * u(rng);
+      const UnicycleState s{centre.x + 2.0 * u(rng), centre.y + 2.0 * u(rng), 3.0 * u(rng), v, 3.0 * u(rng)};
       double slack = 0.0;
       if (!checker.fastPoseFreeStatic({s.x, s.y, std::cos(s.theta), std::sin(s.theta)}, &slack)) continue;
       for (std::size_t a = 0; a < actions.size(); ++a) {
@@ -396,6 +398,7 @@ TEST(CollisionChecker, SweptStaticCheckWithEndClearancesAnswersAsEverySampleLook
         EXPECT_EQ(checker.motionFreeStatic(m), reference);
         ++motions;
         blocked += reference ? 0 : 1;
+        turns_in_walls += m.v_mid == 0.0 && m.w_mid != 0.0 && checker.discSlack(s.x, s.y) == 0.0 ? 1 : 0;
         if (end_slack == -1.0) {
           ++shortcut;
         } else {
@@ -406,9 +409,35 @@ TEST(CollisionChecker, SweptStaticCheckWithEndClearancesAnswersAsEverySampleLook
       }
     }
   }
-  // Both kinds occur: motions cleared without a lookup, and motions into the walls.
+  // Both kinds occur: motions cleared without a lookup, and motions into the walls; and turns
+  // on the spot where the disc clearance is 0.
   EXPECT_GT(shortcut, motions / 20);
   EXPECT_GT(blocked, motions / 20);
+  EXPECT_GT(turns_in_walls, 20);
+}
+
+// A turn on the spot beside a post's corner: the start (heading 0) and the end (heading
+// 0.78) are clear of the post, the headings in between sweep the agent's front corner through
+// it. The origin does not move and its disc clearance is 0 (the post is nearer than the
+// circumradius), so only the looked-up samples can find it.
+TEST(CollisionChecker, TurnOnTheSpotIntoAPostCornerIsBlockedWithoutDiscClearance) {
+  Walls walls;
+  const RobotProfile robot = paperAgentProfile();
+  CollisionChecker checker(robot, walls.local.config());
+  const UnicycleState s{4.69, 5.19, 0.0, 0.0, 0.0};
+  walls.at(Pose2{s.x, s.y, s.theta});
+  checker.prepare(walls.local);
+  const double w = 2.6, dt = 0.3;
+  const ArcMotion m = makeArcMotion(s, 1.0, 0.0, 0.0, w, dt, std::cos(w * dt), std::sin(w * dt));
+  double slack = -1.0;
+  ASSERT_TRUE(checker.fastPoseFreeStatic({s.x, s.y, 1.0, 0.0}, &slack));
+  ASSERT_TRUE(checker.fastPoseFreeStatic({m.x1, m.y1, m.c1, m.s1}));
+  ASSERT_EQ(checker.discSlack(s.x, s.y), 0.0);
+  ASSERT_LT(slack, checker.travelBound(m));
+  EXPECT_FALSE(everySampleFree(checker, m));
+  double end_slack = -2.0;
+  EXPECT_FALSE(checker.motionFreeStatic(m, slack, &end_slack, checker.discSlack(s.x, s.y)));
+  EXPECT_FALSE(checker.motionFreeStatic(m));
 }
 
 // A pose is free of the grid when none of the footprint's outline points (no two more than a
