@@ -1,8 +1,10 @@
 // STAA* on the generated office map, over fixed scenes: the robot's states along a drive from
 // room (0, 1) to room (8, 7), once in the empty office and once with three people walking
 // through the corridor ahead of it; for the paper's agent and for the HSR
-// (config/robots/hsr.yaml), each with the shipped ControlConfig. Counters (per planner call,
-// medians over the scenes and iterations):
+// (config/robots/hsr.yaml), each with the shipped ControlConfig, and for the paper's agent also
+// with the heuristic evaluated eagerly and lazily (the `eager`/`lazy` variants override the
+// shipped StaaConfig::lazy_heuristic). Counters (per planner call, medians over the scenes and
+// iterations):
 //   pops_per_ms, successors_per_ms   queue pops and generated successors per millisecond
 //   heuristic_pct, collision_pct     share of the planning time (from a timed second pass)
 //   path_pct, local_pct              share of the cycle in the global path and the local map
@@ -172,9 +174,17 @@ Pass runPass(const Setup& s, ControlCycle& cycle, const PlannerBudget& budget, b
   return p;
 }
 
-void BM_Staa1000(benchmark::State& state, Robot robot, bool with_movers) {
+enum class Heuristic { kShipped, kEager, kLazy };
+
+ControlConfig config(Heuristic h) {
+  ControlConfig c;
+  if (h != Heuristic::kShipped) c.staa.lazy_heuristic = h == Heuristic::kLazy;
+  return c;
+}
+
+void BM_Staa1000(benchmark::State& state, Robot robot, bool with_movers, Heuristic h) {
   const Setup& s = setup(robot, with_movers);
-  ControlCycle cycle(s.map, s.robot, ControlConfig{}, &threadCpuNs);
+  ControlCycle cycle(s.map, s.robot, config(h), &threadCpuNs);
   Pass all;
   for (auto _ : state) all.add(runPass(s, cycle, PlannerBudget::expansions(1000), false));
   const Pass timed = runPass(s, cycle, PlannerBudget::expansions(1000), true);
@@ -190,9 +200,9 @@ void BM_Staa1000(benchmark::State& state, Robot robot, bool with_movers) {
   state.counters["collision_pct"] = median(timed.collision_share);
 }
 
-void BM_Staa19ms(benchmark::State& state, Robot robot, bool with_movers) {
+void BM_Staa19ms(benchmark::State& state, Robot robot, bool with_movers, Heuristic h) {
   const Setup& s = setup(robot, with_movers);
-  ControlCycle cycle(s.map, s.robot, ControlConfig{}, &threadCpuNs);
+  ControlCycle cycle(s.map, s.robot, config(h), &threadCpuNs);
   Pass all;
   for (auto _ : state) all.add(runPass(s, cycle, PlannerBudget::wallClock(19'000'000, &threadCpuNs), false));
   state.counters["finished_early"] = all.calls > 0 ? static_cast<double>(all.early) / all.calls : 0.0;
@@ -201,14 +211,18 @@ void BM_Staa19ms(benchmark::State& state, Robot robot, bool with_movers) {
   state.counters["successors_per_ms"] = median(all.succ_per_ms);
 }
 
-BENCHMARK_CAPTURE(BM_Staa1000, office_empty, Robot::kPaperAgent, false)->Unit(benchmark::kMillisecond)->Iterations(3);
-BENCHMARK_CAPTURE(BM_Staa1000, office_three_movers, Robot::kPaperAgent, true)->Unit(benchmark::kMillisecond)->Iterations(3);
-BENCHMARK_CAPTURE(BM_Staa19ms, office_empty, Robot::kPaperAgent, false)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK_CAPTURE(BM_Staa19ms, office_three_movers, Robot::kPaperAgent, true)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK_CAPTURE(BM_Staa1000, hsr_office_empty, Robot::kHsr, false)->Unit(benchmark::kMillisecond)->Iterations(3);
-BENCHMARK_CAPTURE(BM_Staa1000, hsr_office_three_movers, Robot::kHsr, true)->Unit(benchmark::kMillisecond)->Iterations(3);
-BENCHMARK_CAPTURE(BM_Staa19ms, hsr_office_empty, Robot::kHsr, false)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK_CAPTURE(BM_Staa19ms, hsr_office_three_movers, Robot::kHsr, true)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_Staa1000, office_empty, Robot::kPaperAgent, false, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa1000, office_three_movers, Robot::kPaperAgent, true, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa19ms, office_empty, Robot::kPaperAgent, false, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_Staa19ms, office_three_movers, Robot::kPaperAgent, true, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_Staa1000, office_empty_eager, Robot::kPaperAgent, false, Heuristic::kEager)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa1000, office_three_movers_eager, Robot::kPaperAgent, true, Heuristic::kEager)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa1000, office_empty_lazy, Robot::kPaperAgent, false, Heuristic::kLazy)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa1000, office_three_movers_lazy, Robot::kPaperAgent, true, Heuristic::kLazy)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa1000, hsr_office_empty, Robot::kHsr, false, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa1000, hsr_office_three_movers, Robot::kHsr, true, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_Staa19ms, hsr_office_empty, Robot::kHsr, false, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_Staa19ms, hsr_office_three_movers, Robot::kHsr, true, Heuristic::kShipped)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 }  // namespace staa
