@@ -165,6 +165,7 @@ LocalMap::LocalMap(const LocalMapConfig& config) : config_(config) {
   }
   row_any_.assign(padded_rows, 0);
   update(Pose2{}, PolygonSet{}, {}, 0.0);
+  real_ = nullptr;  // that set was a temporary
 }
 
 // ---- the cycle's step ----
@@ -172,6 +173,8 @@ LocalMap::LocalMap(const LocalMapConfig& config) : config_(config) {
 void LocalMap::update(const Pose2& robot, const PolygonSet& real, std::span<const Vec2> global_path,
                       double goal_theta) {
   robot_ = robot;
+  real_ = &real;
+  exact_static_ = false;
   cos_ = std::cos(robot.theta);
   sin_ = std::sin(robot.theta);
   frame_ = frameAt(config_.cell_m);

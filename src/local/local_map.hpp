@@ -90,6 +90,16 @@ class LocalMap {
   std::span<const float> costmap() const { return costmap_; }
   const IntermediateGoal& intermediateGoal() const { return goal_; }
 
+  // The real obstacles this update drew C from (the set passed to update(); it must outlive
+  // the uses of this update).
+  const PolygonSet* realObstacles() const { return real_; }
+  // Issue 16: where the route runs through a passage only the footprint fits, the cycle asks
+  // the map's users to decide the static obstacles exactly: a pose the grid rejects is checked
+  // against realObstacles() (CollisionChecker). C's 5 cm cells, rasterized conservatively,
+  // close a slot with 2.5 cm to spare on each side. Every update() clears it.
+  void setExactStatic(bool on) { exact_static_ = on; }
+  bool exactStatic() const { return exact_static_; }
+
   // The grid's world -> cell map for this update, and the same box at another resolution
   // (STAA*'s closed table).
   const GridFrame& frame() const { return frame_; }
@@ -131,6 +141,8 @@ class LocalMap {
   int dilate_cells_ = 0;
   double dilate_r2_ = 0.0;                // dilation radius squared, in cells^2
   IntermediateGoal goal_;
+  const PolygonSet* real_ = nullptr;
+  bool exact_static_ = false;
 };
 
 // Where the path first leaves the box (the paper's G~), or the goal if it never does.

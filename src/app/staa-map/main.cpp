@@ -12,6 +12,7 @@
 #include "map/polygon_map.hpp"
 #include "map/ros_import.hpp"
 #include "path/global_path.hpp"
+#include "robot/robot_profile.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 
@@ -284,6 +285,13 @@ int runPath(const std::string& map_file, const Vec2& from, const Vec2& to, const
     j["edge_checks"] = result.edge_checks;
     j["build_us"] = build_us;
     j["inflate_m"] = options.inflation_radius_m;
+    if (options.passage_inflation_m > 0.0) {
+      // For a footprint (--robot): the passage map's growth, whether the route runs in it,
+      // and the route's length in the band (inside M').
+      j["passage_inflate_m"] = options.passage_inflation_m;
+      j["passage"] = result.passage;
+      j["band_m"] = found ? planner.bandLength(result.path) : 0.0;
+    }
     printJson(j);
     return 0;
   }
@@ -292,7 +300,10 @@ int runPath(const std::string& map_file, const Vec2& from, const Vec2& to, const
               << " m, " << result.path.size() << " vertices, query " << fmt(time_us, 1) << " us (build "
               << fmt(build_us, 1) << " us, " << result.expansions << " expansions, " << result.edge_checks
               << " edge checks" << (result.start_moved ? ", start moved" : "")
-              << (result.goal_moved ? ", goal moved" : "") << ")\n";
+              << (result.goal_moved ? ", goal moved" : "")
+              << (result.passage ? ", through a passage M' closes: " + fmt(planner.bandLength(result.path), 2) + " m in the band"
+                                 : std::string())
+              << ")\n";
   } else {
     std::cout << "no path " << fmtPoint(from) << " -> " << fmtPoint(to) << ": " << staa::toString(result.status)
               << " (inflate " << fmt(options.inflation_radius_m, 2) << " m, query " << fmt(time_us, 1) << " us)\n";
@@ -430,7 +441,7 @@ CLI::App* addGoals(CLI::App& app, GoalsArgs& a) {
 }
 
 struct PathArgs {
-  std::string map_file, from_text, to_text;
+  std::string map_file, from_text, to_text, robot_file;
   staa::GlobalPathOptions options;
   bool json = false;
 };
@@ -448,12 +459,18 @@ CLI::App* addPath(CLI::App& app, PathArgs& a) {
       ->required()
       ->check(cli::point<2>(kPointForm))
       ->type_name("X,Y");
-  path->add_option("--inflate", a.options.inflation_radius_m, "Inflation radius in metres (the robot's radius)")
-      ->transform(cli::nonNegative("a radius in metres"))
-      ->capture_default_str();
+  auto* inflate = path->add_option("--inflate", a.options.inflation_radius_m, "Inflation radius in metres (the robot's radius)")
+                      ->transform(cli::nonNegative("a radius in metres"))
+                      ->capture_default_str();
+  path->add_option("--robot", a.robot_file,
+                   "Robot profile (staa-robot/1): plan as the control cycle does, in the map grown by the footprint's "
+                   "circumradius and in the passage map grown by its inscribed radius + 1 cm (issue 16)")
+      ->excludes(inflate);
   path->add_flag("--json", a.json,
                  "Print {\"found\", \"length\", \"path\", \"time_us\", \"status\", \"start_moved\", \"goal_moved\", "
-                 "\"expansions\", \"edge_checks\", \"build_us\", \"inflate_m\"}; time_us is the query alone");
+                 "\"expansions\", \"edge_checks\", \"build_us\", \"inflate_m\"}, with --robot also \"passage_inflate_m\", "
+                 "\"passage\" (the route runs through a passage the circumradius closes) and \"band_m\" (its length "
+                 "there); time_us is the query alone");
   return path;
 }
 
@@ -514,7 +531,14 @@ int run(int argc, char** argv) {
   if (*import_cmd) return runImport(import);
   if (*generate_cmd) return runGenerate(generate.name, generate.seed, generate.out_file);
   if (*goals_cmd) return runGoals(goals.map_file, goals.out_file, goals.placement);
-  if (*path_cmd) return runPath(path.map_file, point(path.from_text), point(path.to_text), path.options, path.json);
+  if (*path_cmd) {
+    if (!path.robot_file.empty()) {
+      const staa::RobotProfile robot = staa::loadRobotProfile(path.robot_file);
+      path.options.inflation_radius_m = robot.circumradius();
+      path.options.passage_inflation_m = robot.passageRadius();
+    }
+    return runPath(path.map_file, point(path.from_text), point(path.to_text), path.options, path.json);
+  }
   if (*svg_cmd) return runSvg(svg);
   return kExitBadInput;
 }
