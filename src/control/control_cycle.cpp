@@ -227,7 +227,10 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
 
   // 2. Local map and the intermediate goal.
   t0 = clock_();
-  local_.update(robot.pose(), path_.realObstacleSet(), route, goal.theta);
+  // G~ counts a later piece of the path as reached through the box where the local paths can
+  // get there: as far from C as their own obstacles (L, or M'' for a route through it).
+  const double reach_clearance = out.path_passage ? path_.options().passage_inflation_m : local_inflation_;
+  local_.update(robot.pose(), path_.realObstacleSet(), route, goal.theta, reach_clearance);
   // Through a passage only M'' leaves open, the local paths plan in M'' (they follow the
   // route) and the static collision checks are decided exactly where the grid rejects a pose.
   if (path_.hasPassageMap()) {

@@ -4,6 +4,7 @@
 // world at the reproducible expansion budget; a slot narrower than the robot is reported
 // unreachable in the first cycle, and the round HSR plans exactly as before.
 #include "experiment/sim_runner.hpp"
+#include "map/ros_import.hpp"
 #include "robot/robot_profile.hpp"
 
 #include "scenarios.hpp"
@@ -162,6 +163,32 @@ TEST(Passages, TheRoundHsrPlansInMPrimeAloneAsBefore) {
   const CycleOutput out = closed_cycle.step(in, PlannerBudget::expansions(100));
   EXPECT_EQ(out.state, CycleState::kUnreachable);
   EXPECT_EQ(out.path_status, PathStatus::kNoPassage);
+}
+
+// The depot junction of docs/results.md ("Open"): the paper's agent drove north up an aisle to
+// a 0.70 m slot M' closes, the route looped south round the boxes, and the first exit of the
+// robot-aligned box jumped with every small turn: it rocked in place. It arrives from all
+// three starts now, with the passage map (through the slot) and, without it, with the steady
+// G~ alone (round the boxes).
+TEST(Passages, TheDepotJunctionArrivesFromAllThreeStarts) {
+  const auto yaml = test::sharedDir() / "maps/ros/depot.yaml";
+  STAA_REQUIRE_SHARED_FILE(yaml);
+  Scenario s;
+  s.name = "depot";
+  s.map = importRosMap(yaml, ImportOptions{});
+  s.robot = paperAgentProfile();
+  s.goal = {20.0, 11.0, 0.0};
+  for (const bool passages : {true, false}) {
+    ControlConfig config;
+    config.passages = passages;
+    for (const Pose2& start : {Pose2{19.5, 1.5, 1.57}, Pose2{17.2, 4.4, 0.0}, Pose2{21.5, 4.4, 3.14}}) {
+      s.start = start;
+      const PassageDrive run = drive(s, 30.0, config);
+      SCOPED_TRACE(std::string(passages ? "passages" : "M' alone") + " from (" + std::to_string(start.x) + ", " +
+                   std::to_string(start.y) + ")");
+      expectReached(run, s, 30.0);
+    }
+  }
 }
 
 }  // namespace
