@@ -259,25 +259,7 @@ void LocalMap::reachPieces(std::size_t count, std::span<const Vec2> path, double
   const double radius = std::max(0.0, clearance_m / config_.cell_m - 0.5);
   const int r = floorToInt(radius + 1e-9);
   const double r2 = radius * radius + 1e-9;
-  // C dilated by the clearance (byte ORs over shifted rows, as C' is dilated).
-  std::fill(reach_blocked_.begin(), reach_blocked_.end(), std::uint8_t{0});
-  for (int j = 0; j < height_; ++j) {
-    std::uint8_t* out = reach_blocked_.data() + static_cast<std::size_t>(j) * w;
-    for (int dj = -r; dj <= r; ++dj) {
-      const int jj = j + dj;
-      if (jj < 0 || jj >= height_) continue;
-      const double rest = r2 - static_cast<double>(dj * dj);
-      if (rest < 0.0) continue;
-      const std::uint8_t* g = grid_.data() + static_cast<std::size_t>(jj) * w;
-      const int reach = std::min(floorToInt(std::sqrt(rest)), width_ - 1);
-      for (std::size_t i = 0; i < w; ++i) out[i] |= g[i];
-      for (int di = 1; di <= reach; ++di) {
-        const std::size_t d = static_cast<std::size_t>(di);
-        for (std::size_t i = 0; i + d < w; ++i) out[i] |= g[i + d];
-        for (std::size_t i = d; i < w; ++i) out[i] |= g[i - d];
-      }
-    }
-  }
+  dilateGrid(reach_blocked_, r, r2);  // C dilated by the clearance
   std::fill(reach_seen_.begin(), reach_seen_.end(), std::uint8_t{0});
   std::size_t head = 0, tail = 0;
   // Visits the cells along a piece, half a cell apart, until visit returns true.
@@ -451,23 +433,19 @@ void LocalMap::addEdgeCrossings(const Vec2& a, const Vec2& b, bool convex) {
   }
 }
 
-// C': C dilated by a disk of dilate_m (cell centre distances), then a separable Gaussian
-// blur (kernel sum 1, zero outside the box), and max(dilated, blurred) so that obstacles stay
-// exactly 1 while the cost falls off with distance to 0.
-void LocalMap::buildCostmap() {
+// C dilated by a disk of cell-centre distances (r2 in cells^2, r its whole part): row j + dj
+// contributes its cells within reach(dj) = floor(sqrt(r2 - dj^2)) along the row. Byte ORs
+// over shifted rows (the compiler vectorises them).
+void LocalMap::dilateGrid(std::vector<std::uint8_t>& out_grid, int r, double r2) const {
   const std::size_t w = static_cast<std::size_t>(width_);
-
-  // Dilation by a disk of cell-centre distances: row j + dj contributes its cells within
-  // reach(dj) = floor(sqrt(r^2 - dj^2)) along the row. Byte ORs over shifted rows (the
-  // compiler vectorises them).
-  std::fill(dilated8_.begin(), dilated8_.end(), std::uint8_t{0});
+  std::fill(out_grid.begin(), out_grid.end(), std::uint8_t{0});
   for (int j = 0; j < height_; ++j) {
-    std::uint8_t* out = dilated8_.data() + static_cast<std::size_t>(j) * w;
-    for (int dj = -dilate_cells_; dj <= dilate_cells_; ++dj) {
+    std::uint8_t* out = out_grid.data() + static_cast<std::size_t>(j) * w;
+    for (int dj = -r; dj <= r; ++dj) {
       const int jj = j + dj;
       if (jj < 0 || jj >= height_) continue;
       const std::uint8_t* g = grid_.data() + static_cast<std::size_t>(jj) * w;
-      const double rest = dilate_r2_ - static_cast<double>(dj * dj);
+      const double rest = r2 - static_cast<double>(dj * dj);
       if (rest < 0.0) continue;
       const int reach = std::min(floorToInt(std::sqrt(rest)), width_ - 1);
       for (std::size_t i = 0; i < w; ++i) out[i] |= g[i];
@@ -478,6 +456,15 @@ void LocalMap::buildCostmap() {
       }
     }
   }
+}
+
+// C': C dilated by a disk of dilate_m (cell centre distances), then a separable Gaussian
+// blur (kernel sum 1, zero outside the box), and max(dilated, blurred) so that obstacles stay
+// exactly 1 while the cost falls off with distance to 0.
+void LocalMap::buildCostmap() {
+  const std::size_t w = static_cast<std::size_t>(width_);
+
+  dilateGrid(dilated8_, dilate_cells_, dilate_r2_);
   if (blur_radius_ == 0) {
     std::transform(dilated8_.begin(), dilated8_.end(), costmap_.begin(),
                    [](std::uint8_t d) { return static_cast<float>(d); });

@@ -139,6 +139,7 @@ class LocalMap {
   void markEdgeCells(const Vec2& a, const Vec2& b);      // supercover of one edge
   void addEdgeCrossings(const Vec2& a, const Vec2& b, bool convex);  // at the row centres
   void buildCostmap();                                     // C' from grid_
+  void dilateGrid(std::vector<std::uint8_t>& out, int r, double r2) const;  // C dilated by a disk
   // G~'s reach test: which of the path's pieces (pieces_[0, count)) the robot reaches
   // without leaving the box, through cells at least clearance_m from C (reached_).
   void reachPieces(std::size_t count, std::span<const Vec2> path, double clearance_m);
