@@ -22,7 +22,7 @@ const char* toString(CycleState state) {
 GlobalPathOptions ControlCycle::pathOptions(const ControlConfig& config, const RobotProfile& robot, double inflation) {
   GlobalPathOptions o = config.path;
   o.inflation_radius_m = inflation;
-  // At most M''s growth: a round robot's passage map would be M' itself (none is built).
+  // At most the growth of M': a round robot's passage map would be M' itself (none is built).
   o.passage_inflation_m = config.passages ? std::min(robot.passageRadius(config.passage_margin_m), inflation) : 0.0;
   o.search.max_dynamic_polygons = config.max_moving_obstacles;
   o.search.max_dynamic_vertices = config.max_moving_obstacles * FixedPolygon::kCapacity;

@@ -123,7 +123,7 @@ GlobalPath GlobalPathPlanner::planStatic(const Vec2& start, const Vec2& goal, co
     route_in_passage_ = true;
     return narrow;  // band_m stays 0: nothing to weigh it against (bandLength() tells it)
   }
-  // The route in M' has no band but where its ends were moved into M''s free space.
+  // The route in M' runs in the band only where an end inside M' was moved out of it.
   wide.band_m = wide.start_moved || wide.goal_moved ? bandLength(wide.path) : 0.0;
   const double wide_cost = wide.length + options_.band_cost * wide.band_m;
   // M'' wins when cheaper, by the hysteresis margin against a route in M' chosen before.
