@@ -314,7 +314,7 @@ int runPath(const std::string& map_file, const Vec2& from, const Vec2& to, const
 // ---- svg ----
 
 struct SvgArgs {
-  std::string map_file, out_file, from_text, to_text;
+  std::string map_file, out_file, from_text, to_text, robot_file;
   staa::GlobalPathOptions options;
   double scale = 0.0;
   const CLI::Option* scale_option = nullptr;
@@ -329,9 +329,11 @@ int runSvg(const SvgArgs& a) {
 
   staa::GlobalPathPlanner planner(map, options);
   const bool with_inflated = options.inflation_radius_m > 0.0;
+  const bool with_passage = planner.hasPassageMap();
   const double px_per_m = a.scale_option->count() > 0 ? a.scale : staa::autoScale(staa::mapDrawingBox(map));
   staa::SvgCanvas canvas = staa::makeMapCanvas(map, px_per_m);
-  staa::drawMap(canvas, map, with_inflated ? &planner.inflatedObstacles() : nullptr);
+  staa::drawMap(canvas, map, with_inflated ? &planner.inflatedObstacles() : nullptr,
+                with_passage ? &planner.passageObstacles() : nullptr);
 
   std::string caption = map.name;
   if (with_path) {
@@ -339,16 +341,22 @@ int runSvg(const SvgArgs& a) {
     explainEndpoint(result.status, from, to);
     staa::drawPath(canvas, result.path, from, to);
     caption += result.status == staa::PathStatus::kFound
-                   ? ": path " + fmtPoint(from) + " to " + fmtPoint(to) + ", " + fmt(result.length, 2) + " m"
+                   ? ": path " + fmtPoint(from) + " to " + fmtPoint(to) + ", " + fmt(result.length, 2) + " m" +
+                         (result.passage ? " through M'' (" + fmt(planner.bandLength(result.path), 2) + " m in the band)"
+                                         : std::string())
                    : std::string(": ") + staa::toString(result.status);
     if (result.status != staa::PathStatus::kFound) {
       std::cout << "no path " << fmtPoint(from) << " -> " << fmtPoint(to) << ": " << staa::toString(result.status)
                 << '\n';
     }
   }
-  if (with_inflated) caption += " (inflated " + fmt(options.inflation_radius_m, 2) + " m)";
+  if (with_inflated) {
+    caption += with_passage ? " (M' " + fmt(options.inflation_radius_m, 2) + " m, M'' " +
+                                  fmt(options.passage_inflation_m, 2) + " m)"
+                            : " (inflated " + fmt(options.inflation_radius_m, 2) + " m)";
+  }
   canvas.scaleBar();
-  const auto legend = staa::mapLegend(with_inflated, !map.goals.empty(), with_path);
+  const auto legend = staa::mapLegend(with_inflated, !map.goals.empty(), with_path, with_passage);
   canvas.legend(legend);
   canvas.title(caption);
   canvas.save(a.out_file);
@@ -488,13 +496,25 @@ CLI::App* addSvg(staa::cli::CommandLine& cl, SvgArgs& a) {
                  ->type_name("X,Y");
   cl.need(from, to, "a path needs both --from and --to");
   cl.need(to, from, "a path needs both --from and --to");
-  svg->add_option("--inflate", a.options.inflation_radius_m,
-                  "Inflation radius in metres (0: do not draw inflated obstacles)")
-      ->transform(cli::nonNegative("a radius in metres"))
-      ->capture_default_str();
+  auto* inflate = svg->add_option("--inflate", a.options.inflation_radius_m,
+                                  "Inflation radius in metres (0: do not draw inflated obstacles)")
+                      ->transform(cli::nonNegative("a radius in metres"))
+                      ->capture_default_str();
+  svg->add_option("--robot", a.robot_file,
+                  "Robot profile (staa-robot/1): draw M' (its circumradius) and the passage map (its inscribed "
+                  "radius + 1 cm), and plan the path as the control cycle does (issue 16)")
+      ->excludes(inflate);
   a.scale_option = svg->add_option("--scale", a.scale, "Pixels per metre (default: about 900 px across)")
                        ->transform(cli::positive("pixels per metre"));
   return svg;
+}
+
+// --robot: M' grown by the footprint's circumradius, the passage map by its inscribed radius
+// + 1 cm, as the control cycle plans its route.
+void setRobotOptions(const std::string& robot_file, staa::GlobalPathOptions& options) {
+  const staa::RobotProfile robot = staa::loadRobotProfile(robot_file);
+  options.inflation_radius_m = robot.circumradius();
+  options.passage_inflation_m = robot.passageRadius();
 }
 
 // CLI11 reports an unknown subcommand as "a subcommand is required"; name it instead.
@@ -532,14 +552,13 @@ int run(int argc, char** argv) {
   if (*generate_cmd) return runGenerate(generate.name, generate.seed, generate.out_file);
   if (*goals_cmd) return runGoals(goals.map_file, goals.out_file, goals.placement);
   if (*path_cmd) {
-    if (!path.robot_file.empty()) {
-      const staa::RobotProfile robot = staa::loadRobotProfile(path.robot_file);
-      path.options.inflation_radius_m = robot.circumradius();
-      path.options.passage_inflation_m = robot.passageRadius();
-    }
+    if (!path.robot_file.empty()) setRobotOptions(path.robot_file, path.options);
     return runPath(path.map_file, point(path.from_text), point(path.to_text), path.options, path.json);
   }
-  if (*svg_cmd) return runSvg(svg);
+  if (*svg_cmd) {
+    if (!svg.robot_file.empty()) setRobotOptions(svg.robot_file, svg.options);
+    return runSvg(svg);
+  }
   return kExitBadInput;
 }
 
