@@ -99,6 +99,35 @@ void ControlCycle::setGoal(const Pose2& goal) {
   state_ = CycleState::kDriving;
   held_valid_ = false;
   path_misses_ = 0;
+  // A new goal starts the searches afresh, so that a recording replays exactly from here.
+  path_.forgetSearches();
+  staa_.planner().forgetSearches();
+  searches_fresh_ = true;
+  ++goal_changes_;
+}
+
+ControlCycle::Memory ControlCycle::memory() const {
+  Memory m{goal_, state_, held_valid_, path_misses_, held_path_};
+  m.held_passage = held_passage_;
+  const GlobalPathPlanner::RouteChoice route = path_.routeChoice();
+  // The choice is for the goal the cycle drives to: a choice for another is none.
+  m.route_chosen = route.chosen && goal_.has_value() && route.goal == goal_->position();
+  m.route_in_passage = m.route_chosen && route.in_passage;
+  return m;
+}
+
+void ControlCycle::restoreMemory(const Memory& memory) {
+  goal_ = memory.goal;
+  state_ = memory.state;
+  path_misses_ = memory.path_misses;
+  held_valid_ = memory.held_valid && memory.held_path.size() <= held_path_.capacity();
+  if (held_valid_) held_path_.assign(memory.held_path.begin(), memory.held_path.end());
+  held_passage_ = memory.held_passage;
+  GlobalPathPlanner::RouteChoice route;
+  route.chosen = memory.route_chosen && goal_.has_value();
+  route.in_passage = route.chosen && memory.route_in_passage;
+  if (route.chosen) route.goal = goal_->position();
+  path_.restoreRouteChoice(route);
 }
 
 void ControlCycle::clearGoal() {
@@ -106,6 +135,7 @@ void ControlCycle::clearGoal() {
   state_ = CycleState::kIdle;
   held_valid_ = false;
   path_misses_ = 0;
+  ++goal_changes_;
 }
 
 CycleOutput ControlCycle::stop(const UnicycleState& robot, CycleState state) {
@@ -179,6 +209,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
 
   CycleOutput out;
   // 1. Global path, around the inflated moving obstacles where possible.
+  searches_fresh_ = false;
   std::int64_t t0 = clock_();
   const std::size_t n = std::min(obstacles.size(), views_.size());
   out.obstacles_dropped = obstacles.dropped() + (obstacles.size() - n);

@@ -109,6 +109,31 @@ class GlobalPathPlanner {
   // The length of a path inside M' (for a route in M'': its length in the band), sampled
   // every 5 cm at most; counting stops once it passes `limit_m`. No allocation.
   double bandLength(std::span<const Vec2> path, double limit_m = std::numeric_limits<double>::infinity()) const;
+  // Forgets what the searches kept from earlier queries (MinimalConstruct::forgetGoal), the
+  // passage map's included, and the route chosen between M' and M'' (its hysteresis).
+  void forgetSearches() {
+    static_search_.forgetGoal();
+    dynamic_search_.forgetGoal();
+    if (hasPassageMap()) {
+      passage_static_.forgetGoal();
+      passage_dynamic_.forgetGoal();
+    }
+    route_goal_set_ = false;
+    route_in_passage_ = false;
+  }
+  // The route chosen for a goal between M' and M'' (the hysteresis' state, carried from
+  // query to query): for ControlCycle::Memory, so that a replay restores it.
+  struct RouteChoice {
+    bool chosen = false;     // a route was chosen for `goal`
+    bool in_passage = false; // ... in M''
+    Vec2 goal{0.0, 0.0};
+  };
+  RouteChoice routeChoice() const { return {route_goal_set_, route_in_passage_, route_goal_}; }
+  void restoreRouteChoice(const RouteChoice& choice) {
+    route_goal_set_ = choice.chosen;
+    route_in_passage_ = choice.in_passage;
+    route_goal_ = choice.goal;
+  }
 
  private:
   // One search's query; a failed start inside the map is nudged out to `nudge_radius` (0: not
