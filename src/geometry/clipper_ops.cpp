@@ -145,8 +145,10 @@ std::vector<PolygonWithHoles> inflatePolygons(const std::vector<Polygon>& polygo
   for (const Polygon& p : polygons) {
     // A big polygon is simplified outwards first (geometry/simplify.hpp): Clipper's offset
     // and the path search grow faster than linearly in its vertices. (Not before shrinking:
-    // outwards is not the safe side there.)
-    if (p.size() >= 3) paths.push_back(toPath(radius >= 0.0 ? simplifyIfBig(p) : p));
+    // outwards is not the safe side there.) Only a big one is copied: a normal map's
+    // polygons allocate as before.
+    if (p.size() < 3) continue;
+    paths.push_back(radius >= 0.0 && isBigPolygon(p) ? toPath(simplifyIfBig(p)) : toPath(p));
   }
   for (cl::Path& p : paths) {
     if (!cl::Orientation(p)) cl::ReversePath(p);

@@ -635,7 +635,7 @@ Polygon simplifyOutward(PolygonView poly, double tolerance) {
 }
 
 Polygon simplifyIfBig(PolygonView poly) {
-  if (poly.size() <= kSimplifyAboveVertices) return Polygon(poly.begin(), poly.end());
+  if (!isBigPolygon(poly)) return Polygon(poly.begin(), poly.end());
   return simplifyOutward(poly, kSimplifyTolerance_m);
 }
 

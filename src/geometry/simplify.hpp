@@ -30,8 +30,11 @@ inline constexpr double kSimplifyTolerance_m = 0.02;
 // first, O(n log n) for the shapes of the tests (see simplify.cpp for the steps).
 Polygon simplifyOutward(PolygonView poly, double tolerance);
 
-// simplifyOutward(poly, kSimplifyTolerance_m) for a polygon of more than
-// kSimplifyAboveVertices vertices, else the polygon as it is.
+// Whether the rule applies: more than kSimplifyAboveVertices vertices.
+inline bool isBigPolygon(PolygonView poly) { return poly.size() > kSimplifyAboveVertices; }
+
+// simplifyOutward(poly, kSimplifyTolerance_m) for a big polygon, else the polygon as it is
+// (a copy: callers that keep the original test isBigPolygon first).
 Polygon simplifyIfBig(PolygonView poly);
 
 }  // namespace staa

@@ -41,7 +41,10 @@ GlobalPathPlanner::GlobalPathPlanner(const PolygonMap& map, const GlobalPathOpti
     inflated_ = inflateEachToSimple(real_, options.inflation_radius_m + options.arc_tolerance_m, options.arc_tolerance_m);
   } else {
     // Uninflated, a big polygon is simplified outwards all the same (inflation does it too).
-    for (const Polygon& p : real_) inflated_.push_back(simplifyIfBig(p));
+    inflated_ = real_;
+    for (Polygon& p : inflated_) {
+      if (isBigPolygon(p)) p = simplifyIfBig(p);
+    }
   }
   real_set_.assign(std::span<const Polygon>(real_), PolygonSet::Options{options.search.grid_cell_m});
   static_search_.setStaticObstacles(inflated_);
