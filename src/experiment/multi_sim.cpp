@@ -3,10 +3,12 @@
 #include "control/dwa_controller.hpp"
 #include "control/pd_controller.hpp"
 #include "geometry/splitmix64.hpp"
+#include "record/recorder.hpp"
 #include "world/multi_world.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 
@@ -241,6 +243,22 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   std::vector<AgentCommand> commands(n);
   std::vector<Vec2> current_goals(options.on_step_goals ? n : 0);
   std::vector<int> episodes_before(n, 0);
+  std::unique_ptr<record::SimRecording> recording;
+  if (!options.record_path.empty()) {
+    record::Session session = options.record_session;
+    session.control = agents[0]->cycle->config();
+    session.robot = robot;
+    session.map = map;
+    for (std::size_t i = 0; i < n; ++i) {
+      session.agents.push_back({static_cast<std::uint16_t>(i), agents[i]->controller ? agents[i]->controller->name() : "staa"});
+    }
+    record::RecordLimits limits;
+    limits.obstacles = std::max<std::size_t>(1, n - 1);
+    limits.vertices = std::max<std::size_t>(limits.vertices, robot.footprint.size());
+    limits.path_points = 4096;
+    limits.trajectory = 256;
+    recording = std::make_unique<record::SimRecording>(options.record_path, session, limits);
+  }
 
   MultiSimResult result;
   const double period = 1.0 / options.rate_hz;
@@ -254,10 +272,10 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     // Every agent decides on the same snapshot of the world.
     for (std::size_t i = 0; i < n; ++i) {
       SimAgent& a = *agents[i];
+      std::size_t m = 0;  // the others seen
       if (a.perceives) {
         // The seam where real perception will come in: the others' footprints, velocities and
         // turn rates.
-        std::size_t m = 0;
         for (std::size_t j = 0; j < n; ++j) {
           if (j == i) continue;
           views[m] = world.footprint(j);
@@ -272,8 +290,18 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       CycleInputs in;
       in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
       in.obstacles = a.perceives ? &a.seen : nullptr;
-      const PlannerBudget budget = options.budget.make();
+      PlannerBudget budget = options.budget.make();
+      if (recording) {
+        record::CycleRecorder& rec = recording->agent(i);
+        rec.obstacles({std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m),
+                       std::span<const double>(turn_rates.data(), m)});
+        budget = rec.before(*a.cycle, options.budget, &steadyClockNs);
+      }
       const CycleOutput out = a.cycle->step(in, budget);
+      if (recording) {
+        recording->agent(i).after(*a.cycle, record::simNanos(world.time()), in.robot, record::StepKind::kStepped, 0, &out,
+                                  {out.v_cmd, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
+      }
       commands[i] = AgentCommand{out.v_cmd, out.w_cmd};
       a.last_speed = std::abs(rs.v);
       a.last_tier = out.planned && a.evaluated && !a.controller ? out.plan.brake_safety_tier : -1;
@@ -303,6 +331,13 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
         c.other_tier = agents[static_cast<std::size_t>(c.other)]->last_tier;
       }
       result.contacts.push_back(c);
+      if (recording) {
+        char text[256];
+        std::snprintf(text, sizeof text,
+                      R"({"t":%.17g,"agent":%d,"other":%d,"speed":%.17g,"other_speed":%.17g,"tier":%d,"other_tier":%d})",
+                      c.time_s, c.agent, c.other, c.speed, c.other_speed, c.tier, c.other_tier);
+        recording->event("/contacts", record::simNanos(c.time_s), text);
+      }
     }
 
     // Goals passed within the radius count; the agent gets its next one.
@@ -326,6 +361,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     }
   }
 
+  if (recording) recording->close();
   result.duration_s = world.time();
   result.agents.resize(n);
   for (std::size_t i = 0; i < n; ++i) {

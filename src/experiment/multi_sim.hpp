@@ -65,6 +65,10 @@ struct MultiSimOptions {
   std::function<void(const MultiWorld& world, std::span<const Vec2> current_goals, int cycle)> on_step_goals;
   // Called after every agent's control cycle with what it decided (diagnostics); may be empty.
   std::function<void(std::size_t agent, const CycleOutput& out)> on_cycle;
+  // Every agent's cycles recorded into this MCAP file, the contacts beside them (staa-sim
+  // --record; empty: off). The runner completes the session.
+  std::filesystem::path record_path;
+  record::Session record_session;
 };
 
 // One counted contact episode, as it began: who touched what, how fast both were going in

@@ -1,5 +1,6 @@
 #include "experiment/sim_runner.hpp"
 
+#include "record/recorder.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 
@@ -30,6 +31,20 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   std::vector<Polygon> mover_polys(world.moverCount());
   std::vector<PolygonView> views(world.moverCount());
   std::vector<Vec2> velocities(world.moverCount());
+  std::unique_ptr<record::SimRecording> recording;
+  if (!options.record_path.empty()) {
+    record::Session session = options.record_session;
+    session.control = cycle.config();
+    session.robot = scenario.robot;
+    session.map = scenario.map;
+    session.agents = {{0, options.controller != nullptr ? options.controller->name() : "staa"}};
+    record::RecordLimits limits;
+    limits.obstacles = std::max<std::size_t>(1, world.moverCount());
+    for (std::size_t i = 0; i < world.moverCount(); ++i) limits.vertices = std::max(limits.vertices, world.moverPolygon(i).size());
+    limits.path_points = 4096;
+    limits.trajectory = 256;
+    recording = std::make_unique<record::SimRecording>(options.record_path, session, limits);
+  }
 
   SimResult result;
   std::vector<double> pops, succ, depth, plan_us, cycle_us, path_us;
@@ -48,8 +63,16 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     CycleInputs in;
     in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
     in.obstacles = &obstacles;
-    const PlannerBudget budget = options.budget.make();
+    PlannerBudget budget = options.budget.make();
+    if (recording) {
+      recording->agent(0).obstacles({views, velocities, {}});
+      budget = recording->agent(0).before(cycle, options.budget, &steadyClockNs);
+    }
     const CycleOutput out = cycle.step(in, budget);
+    if (recording) {
+      recording->agent(0).after(cycle, record::simNanos(world.time()), in.robot, record::StepKind::kStepped, 0, &out,
+                                {out.v_cmd, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
+    }
     result.trace.push_back(rs.pose);
     if (out.planned) {
       ++result.calls;
@@ -78,6 +101,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     }
     world.step(period, out.v_cmd, out.w_cmd);
   }
+  if (recording) recording->close();
   result.duration_s = world.time();
   if (!result.reached_goal) result.time_to_goal_s = world.time();
   result.collisions = world.collisionEpisodes();
@@ -95,6 +119,19 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
 
 void writeFrame(const std::filesystem::path& file, const World& world, ControlCycle& cycle, const CycleOutput& out,
                 const DynamicObstacleSet& obstacles) {
+  FrameScene scene;
+  scene.map = &world.map();
+  scene.body = world.footprint();
+  scene.robot = world.robot().pose;
+  char caption[160];
+  std::snprintf(caption, sizeof caption, "t = %.2f s   v = %.2f m/s   pops %u   depth %d   %s", world.time(),
+                world.robot().v, out.plan.stats.pops, out.plan.depth, toString(out.plan.outcome));
+  scene.caption.push_back(caption);
+  drawCycleFrame(file, scene, cycle, out, obstacles);
+}
+
+void drawCycleFrame(const std::filesystem::path& file, const FrameScene& scene, ControlCycle& cycle,
+                    const CycleOutput& out, const DynamicObstacleSet& obstacles) {
   const LocalMap& local = cycle.localMap();
   // Frame the local box with a margin: the paper's Fig. 1 view.
   Box view{local.boxCorners()[0], local.boxCorners()[0]};
@@ -107,11 +144,12 @@ void writeFrame(const std::filesystem::path& file, const World& world, ControlCy
   SvgCanvasOptions opt;
   opt.px_per_m = 60.0;
   opt.side_panel_px = 170.0;
+  opt.margin_px = std::max(opt.margin_px, 14.0 * static_cast<double>(scene.caption.size()) + 6.0);
   SvgCanvas canvas(view, opt);
   canvas.beginGroup(SvgStyle{}, true);
   // Inflated obstacles M' (light) and real ones (dark).
   canvas.polygons(cycle.pathPlanner().inflatedObstacles(), svgFill("#f4c7a1", 0.6));
-  canvas.polygons(world.map().obstacles, svgFill("#4a4a4a"));
+  canvas.polygons(scene.map->obstacles, svgFill("#4a4a4a"));
   // Occupied cells of the collision grid C and the costmap C' (blurred halo).
   std::vector<Box> cells;
   const int w = local.width(), h = local.height();
@@ -156,19 +194,23 @@ void writeFrame(const std::filesystem::path& file, const World& world, ControlCy
   std::vector<Vec2> traj;
   for (const UnicycleState& s : out.plan.trajectory) traj.push_back(s.position());
   canvas.polyline(traj, svgStroke("#c0392b", 3.0));
-  Polygon body = world.footprint();
-  canvas.polygon(body, svgFill("#2c3e50", 0.85));
-  canvas.arrow(world.robot().pose, 0.5, svgStroke("#ffffff", 2.0));
+  // The first action (to the plan's first state), in its braking-safety tier's colour.
+  static const char* const kTierColours[] = {"#e74c3c", "#f39c12", "#27ae60"};
+  const bool tiered = scene.first_action_tier >= 0 && scene.first_action_tier <= 2 && traj.size() >= 2;
+  if (tiered) {
+    canvas.polyline(std::span<const Vec2>(traj.data(), 2), svgStroke(kTierColours[scene.first_action_tier], 6.0));
+  }
+  canvas.polygon(scene.body, svgFill("#2c3e50", 0.85));
+  canvas.arrow(scene.robot, 0.5, svgStroke("#ffffff", 2.0));
   const IntermediateGoal& g = local.intermediateGoal();
   canvas.marker(g.pose.position(), 6.0, svgFill("#f1c40f"));
   canvas.arrow(g.pose, 0.6, svgStroke("#b7950b", 2.0));
   canvas.endGroup();
-  char caption[160];
-  std::snprintf(caption, sizeof caption, "t = %.2f s   v = %.2f m/s   pops %u   depth %d   %s", world.time(),
-                world.robot().v, out.plan.stats.pops, out.plan.depth, toString(out.plan.outcome));
-  canvas.textPx(Vec2(opt.margin_px, 14.0), caption, 12.0);
+  for (std::size_t i = 0; i < scene.caption.size(); ++i) {
+    canvas.textPx(Vec2(opt.margin_px, 14.0 + 14.0 * static_cast<double>(i)), scene.caption[i], i == 0 ? 12.0 : 11.0);
+  }
   canvas.scaleBar();
-  const std::vector<LegendEntry> legend{
+  std::vector<LegendEntry> legend{
       {"obstacle", svgFill("#4a4a4a"), LegendSymbol::kArea},
       {"inflated (M')", svgFill("#f4c7a1", 0.6), LegendSymbol::kArea},
       {"collision grid C", svgFill("#d9822b", 0.9), LegendSymbol::kArea},
@@ -180,6 +222,11 @@ void writeFrame(const std::filesystem::path& file, const World& world, ControlCy
       {"mover, D(t)", svgFill("#8e44ad", 0.8), LegendSymbol::kArea},
       {"G~", svgFill("#f1c40f"), LegendSymbol::kMarker},
   };
+  if (tiered) {
+    static const char* const kTierNames[] = {"1st action: no tier", "1st action: braking", "1st action: passive"};
+    legend.push_back({kTierNames[scene.first_action_tier], svgStroke(kTierColours[scene.first_action_tier], 6.0),
+                      LegendSymbol::kLine});
+  }
   canvas.legend(legend);
   canvas.save(file);
 }

@@ -88,7 +88,7 @@ TEST(Protocol, MalformedRequestsAreRejectedWithTheFieldAndValue) {
       {"42", {"expected a JSON object", "a number"}},
       {R"("goal")", {"expected a JSON object", "a string"}},
       {R"({"cmd":5})", {"\"cmd\"", "expected a string", "got 5"}},
-      {R"({"cmd":"fly"})", {"\"cmd\"", "unknown command \"fly\"", "goal, pose, stop, status or histograms"}},
+      {R"({"cmd":"fly"})", {"\"cmd\"", "unknown command \"fly\"", "goal, pose, stop, status, histograms or record"}},
       {R"({"x":1,"y":2})", {"\"cmd\": missing"}},
       {R"({"cmd":"goal","x":1})", {"\"y\": missing", "goal needs x and y"}},
       {R"({"cmd":"pose","y":1})", {"\"x\": missing", "pose"}},
@@ -382,6 +382,23 @@ TEST(Protocol, HistogramsIsACommandWithoutParameters) {
   EXPECT_THAT(parsedError(R"({"cmd": "histograms", "thread": "control"})"),
               HasSubstr("unknown key \"thread\" for histograms (expected cmd only)"));
   EXPECT_STREQ(toString(RequestKind::kHistograms), "histograms");
+}
+
+TEST(Protocol, RecordSavesToAnAbsolutePathAndReadsBackFromItsLine) {
+  const Request r = parsedOk(R"({"cmd": "record", "save": "/var/log/staad/why.mcap"})");
+  EXPECT_EQ(r.kind, RequestKind::kRecord);
+  EXPECT_STREQ(r.file.data(), "/var/log/staad/why.mcap");
+  EXPECT_EQ(requestLine(r), "{\"cmd\":\"record\",\"save\":\"/var/log/staad/why.mcap\"}\n");
+  EXPECT_STREQ(parsedOk(requestLine(r)).file.data(), r.file.data());
+  EXPECT_THAT(parsedError(R"({"cmd": "record"})"), HasSubstr("\"save\": missing"));
+  EXPECT_THAT(parsedError(R"({"cmd": "record", "save": "why.mcap"})"),
+              HasSubstr("\"save\": expected an absolute path, got \"why.mcap\""));
+  EXPECT_THAT(parsedError(R"({"cmd": "record", "save": 3})"), HasSubstr("\"save\": expected a file path, got 3"));
+  EXPECT_THAT(parsedError(R"({"cmd": "record", "save": "/a", "seconds": 3})"),
+              HasSubstr("unknown key \"seconds\" for record (expected cmd, save)"));
+  EXPECT_THAT(parsedError("{\"cmd\": \"record\", \"save\": \"/" + std::string(600, 'a') + "\"}"),
+              HasSubstr("a path of at most 511 bytes"));
+  EXPECT_STREQ(toString(RequestKind::kRecord), "record");
 }
 
 TEST(Protocol, AHistogramIsItsNonEmptyBinsWithCountOverflowAndMax) {
