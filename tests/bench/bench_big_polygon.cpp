@@ -23,6 +23,7 @@
 #include "geometry/clipper_ops.hpp"
 #include "map/polygon_map.hpp"
 #include "path/global_path.hpp"
+#include "tests/support/big_polygons.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -38,26 +39,8 @@ PolygonMap bigPolygonMap(std::size_t n, Shape shape) {
   PolygonMap map;
   map.name = "big polygon";
   map.bounds = Box{{-10.0, -10.0}, {10.0, 10.0}};
-  Polygon p;
-  p.reserve(n);
-  if (shape == Shape::kRoom) {
-    const std::size_t h = n / 2;
-    for (std::size_t k = 0; k < h; ++k) {
-      const double a = 0.5 / 5.2 + (2.0 * kPi - 1.0 / 5.2) * static_cast<double>(k) / static_cast<double>(h - 1);
-      p.push_back({5.2 * std::cos(a), 5.2 * std::sin(a)});
-    }
-    for (std::size_t k = 0; k < h; ++k) {
-      const double a = 2.0 * kPi - 0.5 / 5.0 - (2.0 * kPi - 1.0 / 5.0) * static_cast<double>(k) / static_cast<double>(h - 1);
-      p.push_back({5.0 * std::cos(a), 5.0 * std::sin(a)});
-    }
-  } else {
-    const double inner = shape == Shape::kRing ? 4.9 : shape == Shape::kSpiky ? 0.5 : 5.0;
-    for (std::size_t k = 0; k < n; ++k) {
-      const double a = 2.0 * kPi * static_cast<double>(k) / static_cast<double>(n);
-      const double r = k % 2 == 0 ? 5.0 : inner;
-      p.push_back({r * std::cos(a), r * std::sin(a)});
-    }
-  }
+  const double inner = shape == Shape::kRing ? 4.9 : shape == Shape::kSpiky ? 0.5 : 5.0;
+  Polygon p = shape == Shape::kRoom ? test::roundRoomWall(n / 2) : test::alternating(n, 5.0, inner);
   map.obstacles.push_back(std::move(p));
   return map;
 }

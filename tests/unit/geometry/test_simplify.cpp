@@ -2,6 +2,7 @@
 
 #include "geometry/polygon.hpp"
 #include "geometry/splitmix64.hpp"
+#include "tests/support/big_polygons.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,34 +13,8 @@
 namespace staa {
 namespace {
 
-// n vertices alternately at radii r_even and r_odd about the origin (counter-clockwise).
-Polygon alternating(std::size_t n, double r_even, double r_odd) {
-  Polygon p;
-  p.reserve(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double a = 2.0 * kPi * static_cast<double>(k) / static_cast<double>(n);
-    const double r = k % 2 == 0 ? r_even : r_odd;
-    p.push_back({r * std::cos(a), r * std::sin(a)});
-  }
-  return p;
-}
-
-// A round room's wall as a CAD export gives it: an annulus (5.0 to 5.2 m) with a 1 m door
-// at angle 0, n vertices along each arc; the outer arc is convex, the inner one concave.
-Polygon roundRoomWall(std::size_t n) {
-  const double r_in = 5.0, r_out = 5.2;
-  const double half_in = 0.5 / r_in, half_out = 0.5 / r_out;  // the door's half-angle on each arc
-  Polygon p;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double a = half_out + (2.0 * kPi - 2.0 * half_out) * static_cast<double>(k) / static_cast<double>(n - 1);
-    p.push_back({r_out * std::cos(a), r_out * std::sin(a)});
-  }
-  for (std::size_t k = 0; k < n; ++k) {
-    const double a = 2.0 * kPi - half_in - (2.0 * kPi - 2.0 * half_in) * static_cast<double>(k) / static_cast<double>(n - 1);
-    p.push_back({r_in * std::cos(a), r_in * std::sin(a)});
-  }
-  return p;
-}
+using test::alternating;
+using test::roundRoomWall;
 
 // A star-shaped outline with radii 4.95 + U(0, 0.05) m: the noise of an unsimplified scan.
 Polygon noisyCircle(std::size_t n, std::uint64_t seed) {

@@ -9,6 +9,7 @@
 
 #include "geometry/polygon.hpp"
 #include "geometry/simplify.hpp"
+#include "tests/support/big_polygons.hpp"
 
 #include <gtest/gtest.h>
 
@@ -21,19 +22,7 @@ namespace {
 
 constexpr std::size_t kVertices = 200000;
 
-// n vertices alternately at radii 5 and `inner` about the origin, counter-clockwise: a
-// toothed ring (inner 4.9: notches 0.3 mm wide and 10 cm deep), a spiky star (inner 0.5) or
-// a fine circle (inner 5).
-Polygon alternating(std::size_t n, double inner) {
-  Polygon p;
-  p.reserve(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double a = 2.0 * kPi * static_cast<double>(k) / static_cast<double>(n);
-    const double r = k % 2 == 0 ? 5.0 : inner;
-    p.push_back({r * std::cos(a), r * std::sin(a)});
-  }
-  return p;
-}
+Polygon alternating(std::size_t n, double inner) { return test::alternating(n, 5.0, inner); }
 
 PolygonMap mapOf(const Polygon& p) {
   PolygonMap map;
@@ -116,16 +105,7 @@ TEST(BigPolygon, PathAroundAFineCircleKeepsClearOfItAndIsNearlyShortest) {
 TEST(BigPolygon, PathIntoARoundRoomGoesThroughItsDoor) {
   // A round room's wall: an annulus from 5.0 to 5.2 m, 100,000 vertices along each arc, a
   // 1 m door facing +x. From outside on the -x side to a point inside the room.
-  Polygon wall;
-  const std::size_t h = kVertices / 2;
-  for (std::size_t k = 0; k < h; ++k) {
-    const double a = 0.5 / 5.2 + (2.0 * kPi - 1.0 / 5.2) * static_cast<double>(k) / static_cast<double>(h - 1);
-    wall.push_back({5.2 * std::cos(a), 5.2 * std::sin(a)});
-  }
-  for (std::size_t k = 0; k < h; ++k) {
-    const double a = 2.0 * kPi - 0.5 / 5.0 - (2.0 * kPi - 1.0 / 5.0) * static_cast<double>(k) / static_cast<double>(h - 1);
-    wall.push_back({5.0 * std::cos(a), 5.0 * std::sin(a)});
-  }
+  const Polygon wall = test::roundRoomWall(kVertices / 2);
   const GlobalPathOptions opt;
   GlobalPathPlanner planner(mapOf(wall), opt);
   EXPECT_LT(planner.inflatedObstacles().front().size(), 400u);
