@@ -1,6 +1,7 @@
 #include "path/global_path.hpp"
 
 #include "geometry/clipper_ops.hpp"
+#include "geometry/simplify.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -38,10 +39,15 @@ GlobalPathPlanner::GlobalPathPlanner(const PolygonMap& map, const GlobalPathOpti
     const auto walls = boundsWalls(*map.bounds, std::max(1.0, 2.0 * options.inflation_radius_m));
     real_.insert(real_.end(), walls.begin(), walls.end());
   }
-  inflated_ = options.inflation_radius_m > 0.0
-                  ? inflateEachToSimple(real_, options.inflation_radius_m + options.arc_tolerance_m,
-                                        options.arc_tolerance_m)
-                  : real_;
+  if (options.inflation_radius_m > 0.0) {
+    inflated_ = inflateEachToSimple(real_, options.inflation_radius_m + options.arc_tolerance_m, options.arc_tolerance_m);
+  } else {
+    // Uninflated, a big polygon is simplified outwards all the same (inflation does it too).
+    inflated_ = real_;
+    for (Polygon& p : inflated_) {
+      if (isBigPolygon(p)) p = simplifyIfBig(p);
+    }
+  }
   real_set_.assign(std::span<const Polygon>(real_), PolygonSet::Options{options.search.grid_cell_m});
   static_search_.setStaticObstacles(inflated_);
   dynamic_search_.setStaticObstacles(inflated_);
