@@ -36,6 +36,7 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
   dynamic_margin_ = sample_step_ + std::max(0.0, dynamic_clearance_m);
   const std::size_t fn = footprint_.size();
   footprint_dynamic_.resize(fn);
+  footprint_exact_.resize(fn);
   for (std::size_t i = 0; i < fn; ++i) {
     const Vec2& prev = footprint_[(i + fn - 1) % fn];
     const Vec2& cur = footprint_[i];
@@ -44,6 +45,7 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
     const Vec2 n1{e1.y(), -e1.x()}, n2{e2.y(), -e2.x()};  // outward for counter-clockwise
     const double denom = std::max(1.0 + n1.dot(n2), 0.25);  // caps the mitre of sharp corners
     footprint_dynamic_[i] = cur + dynamic_margin_ * (n1 + n2) / denom;
+    footprint_exact_[i] = cur + kExactMargin * (n1 + n2) / denom;
   }
 
   // Outline points: every vertex plus points along each edge, no two more than a sample
@@ -129,6 +131,7 @@ void CollisionChecker::prepare(const LocalMap& map) {
   frame_.yy = c * inv;
   frame_.y0 = (sn * o.x - c * o.y + map.config().side_m) * inv;
   grid_ = map.grid().data();
+  exact_ = map.exactStatic() ? map.realObstacles() : nullptr;
   grid_w_ = map.width();
   grid_h_ = map.height();
   if (distance_.size() != map.grid().size()) {
@@ -172,7 +175,7 @@ bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) cons
     const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
     return cell >= 0 && grid_[cell] != 0;
   };
-  if (occupiedAt(centroid_)) return false;
+  if (occupiedAt(centroid_)) return exactPoseFree(p);
   // Only the outline points of the circles that are not clear (a clear circle holds no
   // occupied cell, so neither do its points). A looked-up point's distance field value clears
   // the points after it within that distance (the field is 1-Lipschitz and conservative).
@@ -186,12 +189,32 @@ bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) cons
       const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
       covered = -1.0;  // outside the grid: free, but no clearance is claimed
       if (cell >= 0) {
-        if (grid_[cell] != 0) return false;
+        if (grid_[cell] != 0) return exactPoseFree(p);
         covered = distance_[static_cast<std::size_t>(cell)];
       }
     }
   }
   return true;
+}
+
+bool CollisionChecker::exactPoseFree(const FastPose& p) const {
+  if (exact_ == nullptr) return false;
+  // The grown footprint at the pose overlaps an obstacle's interior when one of its vertices
+  // or edges enters one, or when an obstacle lies wholly inside it (one of its vertices does).
+  const std::size_t n = footprint_exact_.size();
+  Box box{{p.x, p.y}, {p.x, p.y}};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& q = footprint_exact_[i];
+    exact_placed_[i] = Vec2{p.x + p.c * q.x() - p.s * q.y(), p.y + p.s * q.x() + p.c * q.y()};
+    box.min = box.min.cwiseMin(exact_placed_[i]);
+    box.max = box.max.cwiseMax(exact_placed_[i]);
+    if (exact_->pointBlocked(exact_placed_[i])) return false;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (exact_->segmentBlocked(exact_placed_[i], exact_placed_[(i + 1) % n])) return false;
+  }
+  const PolygonView robot{exact_placed_.data(), n};
+  return !exact_->forEachEdgeInBox(box, [&](std::size_t v) { return pointInPolygon(exact_->vertex(v), robot); });
 }
 
 bool CollisionChecker::segmentClear(const Vec2& a, const Vec2& b, double radius) const {

@@ -114,6 +114,12 @@ class CollisionChecker {
   // "don't know": near an obstacle, outside the local box, or after too many steps.
   bool segmentClear(const Vec2& a, const Vec2& b, double radius) const;
 
+  // Where the local map asks for it (LocalMap::exactStatic: the route runs through a passage
+  // only the footprint fits, issue 16), a pose the grid rejects is decided by the exact test of
+  // the footprint grown by this margin against the map's real obstacles.
+  static constexpr double kExactMargin = 0.01;
+  bool exactStatic() const { return exact_ != nullptr; }
+
   // This cycle's conservative distance (m) from each grid cell to the nearest occupied one.
   std::span<const float> distanceField() const { return distance_; }
 
@@ -127,6 +133,8 @@ class CollisionChecker {
   // footprint at `pose`; `placed` caches the placed footprint across obstacles of one pose.
   bool obstacleHits(std::size_t k, const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
                     double heading_spread, bool turning, bool& placed) const;
+  // The exact static test (see kExactMargin); false without this cycle's exact obstacles.
+  bool exactPoseFree(const FastPose& p) const;
   // Grid coordinates (cells) of a world point: the local map's frame of this cycle.
   double gridX(double x, double y) const { return frame_.gridX(x, y); }
   double gridY(double x, double y) const { return frame_.gridY(x, y); }
@@ -156,6 +164,9 @@ class CollisionChecker {
   std::array<double, kMaxOutline> outline_gap_{};             // to the next point of the group
   Vec2 centroid_{0.0, 0.0};
   std::vector<float> distance_;  // per cell, metres, conservative
+  const PolygonSet* exact_ = nullptr;  // this cycle's real obstacles, when the map asks for exact tests
+  Polygon footprint_exact_;            // grown by kExactMargin (mitred)
+  mutable std::array<Vec2, 64> exact_placed_{};
   mutable FixedPolygon scratch_;
   mutable std::array<Vec2, 64> placed_{};
 };
