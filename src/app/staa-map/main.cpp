@@ -469,7 +469,7 @@ CLI::App* addPath(CLI::App& app, PathArgs& a) {
                       ->capture_default_str();
   path->add_option("--robot", a.robot_file,
                    "Robot profile (staa-robot/1): plan as the control cycle does, in the map grown by the footprint's "
-                   "circumradius and in the passage map grown by its inscribed radius + 1 cm (issue 16)")
+                   "circumradius and in the passage map grown by its inscribed radius + 1 cm")
       ->excludes(inflate);
   path->add_flag("--json", a.json,
                  "Print {\"found\", \"length\", \"path\", \"time_us\", \"status\", \"start_moved\", \"goal_moved\", "
@@ -499,7 +499,7 @@ CLI::App* addSvg(staa::cli::CommandLine& cl, SvgArgs& a) {
                       ->capture_default_str();
   svg->add_option("--robot", a.robot_file,
                   "Robot profile (staa-robot/1): draw M' (its circumradius) and the passage map (its inscribed "
-                  "radius + 1 cm), and plan the path as the control cycle does (issue 16)")
+                  "radius + 1 cm), and plan the path as the control cycle does")
       ->excludes(inflate);
   a.scale_option = svg->add_option("--scale", a.scale, "Pixels per metre (default: about 900 px across)")
                        ->transform(cli::positive("pixels per metre"));
