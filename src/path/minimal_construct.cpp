@@ -402,9 +402,9 @@ std::int32_t MinimalConstruct::addTargetNode(const Vec2& start) {
   return kTarget;
 }
 
-bool MinimalConstruct::startIsNextPop(bool use_dynamic, Result& result) {
+MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, Result& result) {
   Node& t = nodes_[static_cast<std::size_t>(target_)];
-  if (t.state != kOpen) return false;
+  if (t.state != kOpen) return StartStep::kNotNext;
   // Is some open node's true key g + |node - start| below the start's g? The heap's keys
   // were made for the anchor; moving the start by |start - anchor| lowers no true key by
   // more than that, so the top key minus it bounds them all (no scan). Else scan: only
@@ -426,18 +426,19 @@ bool MinimalConstruct::startIsNextPop(bool use_dynamic, Result& result) {
       }
     }
   }
-  if (lower) return false;
-  ++edge_checks_;
-  const Vec2& u = nodes_[static_cast<std::size_t>(t.parent)].pos;
-  if (!staticFree(u, t.pos) || (use_dynamic && dynamic_.segmentBlocked(u, t.pos))) return false;
+  if (lower) return StartStep::kNotNext;
+  // The edge's blockers at once (what the search's edge check would list), not a yes/no
+  // test followed by the same walk again when the edge is blocked.
+  if (edgeBlockers(target_, use_dynamic) > 0) return StartStep::kBlocked;
   heapRemove(target_);
   t.state = kClosed;
   closed_.push_back(target_);
   ++result.expansions;
-  return true;
+  return StartStep::kFound;
 }
 
-bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, Result& result) {
+bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const Deadline& deadline,
+                                     std::uint32_t& until_check, Result& result) {
   // Retire the previous start: it was never expanded, so nothing hangs below it, and its
   // node takes the new start.
   if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
@@ -447,7 +448,24 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, Result
   // The common case, without touching the heap: the new start's best connection to the
   // tree is at least as short as anything still open (true keys, computed by a scan) and
   // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
-  if (startIsNextPop(use_dynamic, result)) return true;
+  // When that edge is blocked, the search's own step is taken here (the pop of the start,
+  // its blockers discovered, the start re-parented through the next best closed node) and
+  // the test repeated: the open list is re-keyed only when another node would pop first.
+  for (;;) {
+    const StartStep step = startIsNextPop(use_dynamic, result);
+    if (step == StartStep::kFound) return true;
+    if (step == StartStep::kNotNext) break;
+    // search()'s deadline check before this pop, on the same count.
+    if (until_check-- == 0) {
+      if (deadline.passed()) {
+        until_check = 0;
+        break;
+      }
+      until_check = 15;
+    }
+    heapRemove(target_);
+    blockedEdgeInto(target_, edgeBlockers(target_, use_dynamic), use_dynamic);
+  }
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
   for (const std::int32_t n : heap_) {
     Node& node = nodes_[static_cast<std::size_t>(n)];
@@ -473,7 +491,7 @@ void MinimalConstruct::plantTree(const Vec2& start, const Vec2& goal, bool use_d
   tree_goal_ = goal;
 }
 
-bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
+std::size_t MinimalConstruct::edgeBlockers(std::int32_t v, bool use_dynamic) {
   const Node& node = nodes_[static_cast<std::size_t>(v)];
   const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
   ++edge_checks_;
@@ -485,10 +503,19 @@ bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
     for (std::size_t i = nb; i < nb + nd; ++i) blockers_[i] += static_cast<std::uint32_t>(ns_poly);
     nb += nd;
   }
-  if (nb == 0) return true;
-  markEdgeBlocked(node.parent, v);
+  return nb;
+}
+
+void MinimalConstruct::blockedEdgeInto(std::int32_t v, std::size_t nb, bool use_dynamic) {
+  markEdgeBlocked(nodes_[static_cast<std::size_t>(v)].parent, v);
   for (std::size_t i = 0; i < nb; ++i) discoverPolygon(blockers_[i], use_dynamic);
   repairParent(v);
+}
+
+bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
+  const std::size_t nb = edgeBlockers(v, use_dynamic);
+  if (nb == 0) return true;
+  blockedEdgeInto(v, nb, use_dynamic);
   return false;
 }
 
@@ -504,8 +531,8 @@ void MinimalConstruct::close(std::int32_t v) {
   closed_.push_back(v);
 }
 
-MinimalConstruct::Status MinimalConstruct::search(bool use_dynamic, const Deadline& deadline, Result& result) {
-  std::uint32_t until_check = 0;
+MinimalConstruct::Status MinimalConstruct::search(bool use_dynamic, const Deadline& deadline, std::uint32_t until_check,
+                                                  Result& result) {
   while (!heap_.empty()) {
     if (until_check-- == 0) {
       // On abort the tree stays valid (closed nodes keep exact distances, the open list is
@@ -566,12 +593,13 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
   // the dynamic set it was grown with: setDynamicObstacles invalidates it).
   const bool reuse = tree_valid_ && goal == tree_goal_ && use_dynamic == tree_with_dynamic_;
   bool found = false;
+  std::uint32_t until_check = 0;  // pops to the search's next deadline check
   if (reuse) {
-    found = reattachStart(start, use_dynamic, result);
+    found = reattachStart(start, use_dynamic, deadline, until_check, result);
   } else {
     plantTree(start, goal, use_dynamic);
   }
-  result.status = found ? Status::kFound : search(use_dynamic, deadline, result);
+  result.status = found ? Status::kFound : search(use_dynamic, deadline, until_check, result);
   result.edge_checks = edge_checks_;
   result.discovered = total_discovered_;
   if (result.status == Status::kFound) tracePath(start_in, goal_in, result);

@@ -142,13 +142,23 @@ class MinimalConstruct {
   // query()'s steps: a kept tree takes the new start (true when the start is found at once,
   // without a search), or a new tree is planted at the goal; the search pops until the start
   // is closed, the heap is empty or the deadline passes; the path is traced from the start.
-  bool reattachStart(const Vec2& start, bool use_dynamic, Result& result);
-  bool startIsNextPop(bool use_dynamic, Result& result);
+  // A kept tree's start connected by reattachStart may be its next pop (its edge free:
+  // found; blocked: the search's step for a blocked edge is taken without a search) or not.
+  enum class StartStep : std::uint8_t { kFound, kBlocked, kNotNext };
+  bool reattachStart(const Vec2& start, bool use_dynamic, const Deadline& deadline, std::uint32_t& until_check,
+                     Result& result);
+  StartStep startIsNextPop(bool use_dynamic, Result& result);
   void plantTree(const Vec2& start, const Vec2& goal, bool use_dynamic);
-  Status search(bool use_dynamic, const Deadline& deadline, Result& result);
+  // `until_check`: pops before the first deadline check (0: at once).
+  Status search(bool use_dynamic, const Deadline& deadline, std::uint32_t until_check, Result& result);
   // The lazy edge check into a popped node; a blocked edge discovers its blockers and repairs
   // the node's parent (false).
   bool edgeIntoFree(std::int32_t v, bool use_dynamic);
+  // The polygons the edge into v (from its parent) runs through, into blockers_ (0: free).
+  std::size_t edgeBlockers(std::int32_t v, bool use_dynamic);
+  // The step for a blocked edge into v: the edge remembered, its blockers discovered, v
+  // re-parented.
+  void blockedEdgeInto(std::int32_t v, std::size_t blockers, bool use_dynamic);
   void close(std::int32_t v);
   void tracePath(const Vec2& start_in, const Vec2& goal_in, Result& result);
   bool edgeKnownBlocked(std::int32_t a, std::int32_t b) const;
