@@ -90,6 +90,7 @@ class Heuristic {
   std::span<const Vec2> lastPath() const { return last_path_; }
   // Forgets what the searches kept from earlier cycles (MinimalConstruct::forgetGoal).
   void forgetSearches() {
+    ++memo_stamp_;
     static_search_.forgetGoal();
     for (MinimalConstruct& mc : dynamic_search_) mc.forgetGoal();
     passage_static_.forgetGoal();
@@ -123,6 +124,25 @@ class Heuristic {
   std::vector<PolygonView> views_;
   std::span<const Vec2> last_path_;
   std::uint64_t queries_ = 0;
+
+  // This cycle's answers by exact start point and search (the static one, or the dynamic
+  // one of a depth): STAA* asks the same point again for about one state in ten (states
+  // reached by different actions, turns on the spot). A direct-mapped table sized at
+  // construction (no allocation in the cycle), emptied by prepare() through the stamp; a
+  // path longer than kMemoPath vertices, or an answer the deadline cut, is not kept.
+  struct MemoEntry {
+    std::uint64_t x_bits = 0, y_bits = 0;
+    double length = 0.0;
+    std::uint32_t stamp = 0;
+    std::int32_t depth_key = 0;
+    std::uint32_t count = 0;  // path vertices; 0: no path (unreachable G~)
+  };
+  static constexpr std::size_t kMemoSlots = 512;
+  static constexpr std::size_t kMemoPath = 12;
+  std::vector<MemoEntry> memo_;
+  std::vector<Vec2> memo_path_;
+  std::uint32_t memo_stamp_ = 1;
+  double hFromPath(const UnicycleState& s, std::span<const Vec2> path, double length);
 
   const CollisionChecker* clearance_ = nullptr;
   static bool clearSegment(const void* self, const Vec2& a, const Vec2& b);
