@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace staa {
@@ -21,6 +22,9 @@ constexpr std::uint32_t kNoPolygon = std::numeric_limits<std::uint32_t>::max();
 bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next, double bound) {
   return orientSignProduct(at, other, prev, next, bound) >= 0;
 }
+
+// Equal to the bit (0.0 and -0.0 apart): a kept answer is reused only for the very same input.
+bool sameBits(const Vec2& a, const Vec2& b) { return std::memcmp(a.data(), b.data(), 2 * sizeof(double)) == 0; }
 
 std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
@@ -63,6 +67,7 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   blocked_generation_ = 1;
   have_goal_ = false;
   tree_valid_ = false;
+  goal_free_valid_ = false;
   // Which static polygons cover each static corner never changes: find out once.
   static_cover_offsets_.assign(static_.vertexCount() + 1, 0);
   static_cover_.clear();
@@ -86,6 +91,7 @@ void MinimalConstruct::setDynamicObstacles(std::span<const PolygonView> polygons
   }
   dropped_dynamic_ = polygons.size() - n;
   dynamic_.assign(polygons.first(n), PolygonSet::Options{});
+  goal_free_valid_ = false;
   if (tree_with_dynamic_) tree_valid_ = false;  // the kept tree saw the old dynamic obstacles
 }
 
@@ -93,6 +99,7 @@ void MinimalConstruct::clearDynamicObstacles() {
   if (tree_with_dynamic_ && dynamic_.polygonCount() > 0) tree_valid_ = false;
   dynamic_.clear();
   dropped_dynamic_ = 0;
+  goal_free_valid_ = false;
 }
 
 bool MinimalConstruct::pointFree(const Vec2& p, bool with_dynamic) const {
@@ -429,7 +436,8 @@ MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, R
   if (lower) return StartStep::kNotNext;
   // The edge's blockers at once (what the search's edge check would list), not a yes/no
   // test followed by the same walk again when the edge is blocked.
-  if (edgeBlockers(target_, use_dynamic) > 0) return StartStep::kBlocked;
+  start_blockers_ = edgeBlockers(target_, use_dynamic);
+  if (start_blockers_ > 0) return StartStep::kBlocked;
   heapRemove(target_);
   t.state = kClosed;
   closed_.push_back(target_);
@@ -464,7 +472,8 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
       until_check = 15;
     }
     heapRemove(target_);
-    blockedEdgeInto(target_, edgeBlockers(target_, use_dynamic), use_dynamic);
+    ++edge_checks_;  // the search's check of the edge, answered by the test above
+    blockedEdgeInto(target_, start_blockers_, use_dynamic);
   }
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
   for (const std::int32_t n : heap_) {
@@ -576,7 +585,16 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     result.status = Status::kStartBlocked;
     return result;
   }
-  if (!nearestFreePoint(goal_in, use_dynamic, goal)) {
+  // Every query of a cycle asks for the same goal among the same obstacles: its free point
+  // is kept until the obstacles or the oracle change.
+  if (!goal_free_valid_ || !sameBits(goal_in, goal_free_in_) || use_dynamic != goal_free_dynamic_) {
+    goal_free_found_ = nearestFreePoint(goal_in, use_dynamic, goal_free_);
+    goal_free_in_ = goal_in;
+    goal_free_dynamic_ = use_dynamic;
+    goal_free_valid_ = true;
+  }
+  goal = goal_free_;
+  if (!goal_free_found_) {
     result.status = Status::kGoalBlocked;
     return result;
   }

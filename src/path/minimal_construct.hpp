@@ -90,6 +90,7 @@ class MinimalConstruct {
   void setFreeSegmentOracle(FreeSegmentOracle oracle, const void* context) {
     oracle_ = oracle;
     oracle_context_ = context;
+    goal_free_valid_ = false;
   }
 
   // Shortest path from start to goal among the static obstacles, plus the dynamic ones when
@@ -197,6 +198,7 @@ class MinimalConstruct {
   std::vector<std::uint8_t> static_discovered_;  // persists across queries to the same goal
   std::vector<std::uint8_t> dynamic_discovered_;
   std::vector<std::uint32_t> blockers_;
+  std::size_t start_blockers_ = 0;  // startIsNextPop's count in blockers_ (kBlocked)
   std::vector<std::uint32_t> pending_;   // polygons waiting to be discovered
   std::vector<std::uint32_t> rediscover_;  // kept polygons, while a new graph is started
   std::vector<std::uint32_t> covering_;
@@ -212,6 +214,12 @@ class MinimalConstruct {
   std::uint32_t blocked_generation_ = 1;
   std::size_t blocked_count_ = 0;
 
+  // The last goal's nearest free point (query), valid until the obstacles or the oracle change.
+  Vec2 goal_free_in_{0.0, 0.0};
+  Vec2 goal_free_{0.0, 0.0};
+  bool goal_free_found_ = false;
+  bool goal_free_dynamic_ = false;
+  bool goal_free_valid_ = false;
   Vec2 goal_pos_{0.0, 0.0};   // the goal whose discovered polygons are kept
   bool have_goal_ = false;
   Vec2 target_pos_{0.0, 0.0};  // the start: the backward search's target, its heuristic's anchor
