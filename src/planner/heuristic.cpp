@@ -28,7 +28,13 @@ bool parseHeuristicKind(const char* text, HeuristicKind& out) {
   return false;
 }
 
-double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits) {
+namespace {
+
+// Eq. (4, 5) over a polyline whose segment i (from path[i - 1] to path[i]) has the length
+// and direction `segment(i, len, phi)` gives (phi only read for len >= 1e-9).
+template <typename Segment>
+double pathRtrOf(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits,
+                 Segment&& segment) {
   // Eq. (4, 5): RTR segments concatenated. Each segment is driven facing along it (forward,
   // v_max) or facing against it (backward, |v_min|); the two choices are the DP's states, so
   // turning around between segments costs its rotation like any other turn.
@@ -39,10 +45,9 @@ double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta
   double head_f = start_theta, head_b = start_theta;
   bool first = true;
   for (std::size_t i = 1; i < path.size(); ++i) {
-    const Vec2 d = path[i] - path[i - 1];
-    const double len = d.norm();
+    double len, phi;
+    segment(i, len, phi);
     if (len < 1e-9) continue;
-    const double phi = std::atan2(d.y(), d.x());
     const double fwd = phi, bwd = phi + kPi;
     double nf, nb;
     if (first) {
@@ -65,6 +70,50 @@ double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta
                   cost_b + std::abs(wrapAngle(goal_theta - head_b)) * inv_w);
 }
 
+void segmentOf(const Vec2& a, const Vec2& b, double& len, double& phi) {
+  const Vec2 d = b - a;
+  len = d.norm();
+  phi = std::atan2(d.y(), d.x());
+}
+
+}  // namespace
+
+double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits) {
+  return pathRtrOf(path, start_theta, goal_theta, limits,
+                   [&](std::size_t i, double& len, double& phi) { segmentOf(path[i - 1], path[i], len, phi); });
+}
+
+double Heuristic::pathRtrCached(std::span<const Vec2> path, double start_theta) {
+  // Beyond its first segment a path runs along the search tree, the same segments for many
+  // states: their lengths and directions (a square root and an arc tangent each) are kept by
+  // the segment's end points, a pure function of them.
+  return pathRtrOf(path, start_theta, goal_.theta, limits_, [&](std::size_t i, double& len, double& phi) {
+    const Vec2& a = path[i - 1];
+    const Vec2& b = path[i];
+    if (i == 1) {
+      segmentOf(a, b, len, phi);
+      return;
+    }
+    std::uint64_t key[4];
+    std::memcpy(key, a.data(), 2 * sizeof(double));
+    std::memcpy(key + 2, b.data(), 2 * sizeof(double));
+    std::uint64_t hash = (key[0] * 0x9E3779B97F4A7C15ULL) ^ (key[1] * 0xC2B2AE3D27D4EB4FULL) ^
+                         (key[2] * 0x165667B19E3779F9ULL) ^ (key[3] * 0x27D4EB2F165667C5ULL);
+    hash ^= hash >> 31;
+    SegmentEntry& e = segments_[static_cast<std::size_t>(hash) & (kSegmentSlots - 1)];
+    if (e.valid && std::memcmp(e.key, key, sizeof key) == 0) {
+      len = e.len;
+      phi = e.phi;
+      return;
+    }
+    segmentOf(a, b, len, phi);
+    std::memcpy(e.key, key, sizeof key);
+    e.len = len;
+    e.phi = phi;
+    e.valid = true;
+  });
+}
+
 Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, const std::vector<Polygon>& inflated_static,
                      const LocalMapConfig& local, std::size_t max_obstacles)
     : config_(config),
@@ -72,7 +121,8 @@ Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, 
       inflated_(3 * max_obstacles),
       views_(max_obstacles),
       memo_(kMemoSlots),
-      memo_path_(kMemoSlots * kMemoPath) {
+      memo_path_(kMemoSlots * kMemoPath),
+      segments_(kSegmentSlots) {
   config_.dynamic_depth = std::clamp(config_.dynamic_depth, 0, 3);
   MinimalConstruct::Options opt;
   opt.max_dynamic_polygons = views_.size();
@@ -171,7 +221,7 @@ double Heuristic::hFromPath(const UnicycleState& s, std::span<const Vec2> path, 
   }
   last_path_ = path;
   if (config_.kind == HeuristicKind::kPathEuclid) return length / limits_.v_max;
-  return pathRtr(path, s.theta, goal_.theta, limits_);
+  return pathRtrCached(path, s.theta);
 }
 
 double Heuristic::evaluatePath(const UnicycleState& s, int depth) {

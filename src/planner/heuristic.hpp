@@ -143,6 +143,17 @@ class Heuristic {
   std::vector<Vec2> memo_path_;
   std::uint32_t memo_stamp_ = 1;
   double hFromPath(const UnicycleState& s, std::span<const Vec2> path, double length);
+  // pathRtr to G~, with the lengths and directions of segments seen before looked up
+  // (direct-mapped, sized at construction; the same values, bit for bit).
+  struct SegmentEntry {
+    std::uint64_t key[4] = {0, 0, 0, 0};  // the end points' bits
+    double len = 0.0;
+    double phi = 0.0;
+    bool valid = false;
+  };
+  static constexpr std::size_t kSegmentSlots = 256;
+  std::vector<SegmentEntry> segments_;
+  double pathRtrCached(std::span<const Vec2> path, double start_theta);
 
   const CollisionChecker* clearance_ = nullptr;
   static bool clearSegment(const void* self, const Vec2& a, const Vec2& b);
