@@ -10,6 +10,8 @@
 // the four Minimal Construct searches (static, and t = 1, 2, 3 steps ahead) keeps its
 // backward search tree from G~ for the whole cycle. A query then connects the state to the
 // tree and rarely expands anything: the tree is the per-cycle structure all queries share.
+// A point asked again in the same cycle (about one query in ten) is answered from a table
+// of this cycle's paths, and the tree's segments keep their lengths and directions.
 // The values are exactly the path-RTR values of the paper.
 
 #include "robot/robot_profile.hpp"
