@@ -459,7 +459,7 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   // When that edge is blocked, the search's own step is taken here (the pop of the start,
   // its blockers discovered, the start re-parented through the next best closed node) and
   // the test repeated: the open list is re-keyed only when another node would pop first.
-  for (;;) {
+  for (bool first = true;; first = false) {
     const StartStep step = startIsNextPop(use_dynamic, result);
     if (step == StartStep::kFound) return true;
     if (step == StartStep::kNotNext) break;
@@ -472,7 +472,9 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
       until_check = 15;
     }
     heapRemove(target_);
-    ++edge_checks_;  // the search's check of the edge, answered by the test above
+    // The search checked the first start edge again after this test (counted as it did);
+    // later tests stand for the search's own checks.
+    if (first) ++edge_checks_;
     blockedEdgeInto(target_, start_blockers_, use_dynamic);
   }
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
