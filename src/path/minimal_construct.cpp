@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace staa {
@@ -21,6 +22,9 @@ constexpr std::uint32_t kNoPolygon = std::numeric_limits<std::uint32_t>::max();
 bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next, double bound) {
   return orientSignProduct(at, other, prev, next, bound) >= 0;
 }
+
+// Equal to the bit (0.0 and -0.0 apart): a kept answer is reused only for the very same input.
+bool sameBits(const Vec2& a, const Vec2& b) { return std::memcmp(a.data(), b.data(), 2 * sizeof(double)) == 0; }
 
 std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
@@ -63,6 +67,7 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   blocked_generation_ = 1;
   have_goal_ = false;
   tree_valid_ = false;
+  goal_free_valid_ = false;
   // Which static polygons cover each static corner never changes: find out once.
   static_cover_offsets_.assign(static_.vertexCount() + 1, 0);
   static_cover_.clear();
@@ -86,6 +91,7 @@ void MinimalConstruct::setDynamicObstacles(std::span<const PolygonView> polygons
   }
   dropped_dynamic_ = polygons.size() - n;
   dynamic_.assign(polygons.first(n), PolygonSet::Options{});
+  goal_free_valid_ = false;
   if (tree_with_dynamic_) tree_valid_ = false;  // the kept tree saw the old dynamic obstacles
 }
 
@@ -93,6 +99,7 @@ void MinimalConstruct::clearDynamicObstacles() {
   if (tree_with_dynamic_ && dynamic_.polygonCount() > 0) tree_valid_ = false;
   dynamic_.clear();
   dropped_dynamic_ = 0;
+  goal_free_valid_ = false;
 }
 
 bool MinimalConstruct::pointFree(const Vec2& p, bool with_dynamic) const {
@@ -402,9 +409,9 @@ std::int32_t MinimalConstruct::addTargetNode(const Vec2& start) {
   return kTarget;
 }
 
-bool MinimalConstruct::startIsNextPop(bool use_dynamic, Result& result) {
+MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, Result& result) {
   Node& t = nodes_[static_cast<std::size_t>(target_)];
-  if (t.state != kOpen) return false;
+  if (t.state != kOpen) return StartStep::kNotNext;
   // Is some open node's true key g + |node - start| below the start's g? The heap's keys
   // were made for the anchor; moving the start by |start - anchor| lowers no true key by
   // more than that, so the top key minus it bounds them all (no scan). Else scan: only
@@ -426,18 +433,20 @@ bool MinimalConstruct::startIsNextPop(bool use_dynamic, Result& result) {
       }
     }
   }
-  if (lower) return false;
-  ++edge_checks_;
-  const Vec2& u = nodes_[static_cast<std::size_t>(t.parent)].pos;
-  if (!staticFree(u, t.pos) || (use_dynamic && dynamic_.segmentBlocked(u, t.pos))) return false;
+  if (lower) return StartStep::kNotNext;
+  // The edge's blockers at once (what the search's edge check would list), not a yes/no
+  // test followed by the same walk again when the edge is blocked.
+  start_blockers_ = edgeBlockers(target_, use_dynamic);
+  if (start_blockers_ > 0) return StartStep::kBlocked;
   heapRemove(target_);
   t.state = kClosed;
   closed_.push_back(target_);
   ++result.expansions;
-  return true;
+  return StartStep::kFound;
 }
 
-bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, Result& result) {
+bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const Deadline& deadline,
+                                     std::uint32_t& until_check, Result& result) {
   // Retire the previous start: it was never expanded, so nothing hangs below it, and its
   // node takes the new start.
   if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
@@ -447,7 +456,27 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, Result
   // The common case, without touching the heap: the new start's best connection to the
   // tree is at least as short as anything still open (true keys, computed by a scan) and
   // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
-  if (startIsNextPop(use_dynamic, result)) return true;
+  // When that edge is blocked, the search's own step is taken here (the pop of the start,
+  // its blockers discovered, the start re-parented through the next best closed node) and
+  // the test repeated: the open list is re-keyed only when another node would pop first.
+  for (bool first = true;; first = false) {
+    const StartStep step = startIsNextPop(use_dynamic, result);
+    if (step == StartStep::kFound) return true;
+    if (step == StartStep::kNotNext) break;
+    // search()'s deadline check before this pop, on the same count.
+    if (until_check-- == 0) {
+      if (deadline.passed()) {
+        until_check = 0;
+        break;
+      }
+      until_check = 15;
+    }
+    heapRemove(target_);
+    // The search checked the first start edge again after this test (counted as it did);
+    // later tests stand for the search's own checks.
+    if (first) ++edge_checks_;
+    blockedEdgeInto(target_, start_blockers_, use_dynamic);
+  }
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
   for (const std::int32_t n : heap_) {
     Node& node = nodes_[static_cast<std::size_t>(n)];
@@ -473,7 +502,7 @@ void MinimalConstruct::plantTree(const Vec2& start, const Vec2& goal, bool use_d
   tree_goal_ = goal;
 }
 
-bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
+std::size_t MinimalConstruct::edgeBlockers(std::int32_t v, bool use_dynamic) {
   const Node& node = nodes_[static_cast<std::size_t>(v)];
   const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
   ++edge_checks_;
@@ -485,10 +514,19 @@ bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
     for (std::size_t i = nb; i < nb + nd; ++i) blockers_[i] += static_cast<std::uint32_t>(ns_poly);
     nb += nd;
   }
-  if (nb == 0) return true;
-  markEdgeBlocked(node.parent, v);
+  return nb;
+}
+
+void MinimalConstruct::blockedEdgeInto(std::int32_t v, std::size_t nb, bool use_dynamic) {
+  markEdgeBlocked(nodes_[static_cast<std::size_t>(v)].parent, v);
   for (std::size_t i = 0; i < nb; ++i) discoverPolygon(blockers_[i], use_dynamic);
   repairParent(v);
+}
+
+bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
+  const std::size_t nb = edgeBlockers(v, use_dynamic);
+  if (nb == 0) return true;
+  blockedEdgeInto(v, nb, use_dynamic);
   return false;
 }
 
@@ -504,8 +542,8 @@ void MinimalConstruct::close(std::int32_t v) {
   closed_.push_back(v);
 }
 
-MinimalConstruct::Status MinimalConstruct::search(bool use_dynamic, const Deadline& deadline, Result& result) {
-  std::uint32_t until_check = 0;
+MinimalConstruct::Status MinimalConstruct::search(bool use_dynamic, const Deadline& deadline, std::uint32_t until_check,
+                                                  Result& result) {
   while (!heap_.empty()) {
     if (until_check-- == 0) {
       // On abort the tree stays valid (closed nodes keep exact distances, the open list is
@@ -549,7 +587,16 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
     result.status = Status::kStartBlocked;
     return result;
   }
-  if (!nearestFreePoint(goal_in, use_dynamic, goal)) {
+  // Every query of a cycle asks for the same goal among the same obstacles: its free point
+  // is kept until the obstacles or the oracle change.
+  if (!goal_free_valid_ || !sameBits(goal_in, goal_free_in_) || use_dynamic != goal_free_dynamic_) {
+    goal_free_found_ = nearestFreePoint(goal_in, use_dynamic, goal_free_);
+    goal_free_in_ = goal_in;
+    goal_free_dynamic_ = use_dynamic;
+    goal_free_valid_ = true;
+  }
+  goal = goal_free_;
+  if (!goal_free_found_) {
     result.status = Status::kGoalBlocked;
     return result;
   }
@@ -566,12 +613,13 @@ MinimalConstruct::Result MinimalConstruct::query(const Vec2& start_in, const Vec
   // the dynamic set it was grown with: setDynamicObstacles invalidates it).
   const bool reuse = tree_valid_ && goal == tree_goal_ && use_dynamic == tree_with_dynamic_;
   bool found = false;
+  std::uint32_t until_check = 0;  // pops to the search's next deadline check
   if (reuse) {
-    found = reattachStart(start, use_dynamic, result);
+    found = reattachStart(start, use_dynamic, deadline, until_check, result);
   } else {
     plantTree(start, goal, use_dynamic);
   }
-  result.status = found ? Status::kFound : search(use_dynamic, deadline, result);
+  result.status = found ? Status::kFound : search(use_dynamic, deadline, until_check, result);
   result.edge_checks = edge_checks_;
   result.discovered = total_discovered_;
   if (result.status == Status::kFound) tracePath(start_in, goal_in, result);

@@ -90,6 +90,7 @@ class MinimalConstruct {
   void setFreeSegmentOracle(FreeSegmentOracle oracle, const void* context) {
     oracle_ = oracle;
     oracle_context_ = context;
+    goal_free_valid_ = false;
   }
 
   // Shortest path from start to goal among the static obstacles, plus the dynamic ones when
@@ -142,13 +143,23 @@ class MinimalConstruct {
   // query()'s steps: a kept tree takes the new start (true when the start is found at once,
   // without a search), or a new tree is planted at the goal; the search pops until the start
   // is closed, the heap is empty or the deadline passes; the path is traced from the start.
-  bool reattachStart(const Vec2& start, bool use_dynamic, Result& result);
-  bool startIsNextPop(bool use_dynamic, Result& result);
+  // A kept tree's start connected by reattachStart may be its next pop (its edge free:
+  // found; blocked: the search's step for a blocked edge is taken without a search) or not.
+  enum class StartStep : std::uint8_t { kFound, kBlocked, kNotNext };
+  bool reattachStart(const Vec2& start, bool use_dynamic, const Deadline& deadline, std::uint32_t& until_check,
+                     Result& result);
+  StartStep startIsNextPop(bool use_dynamic, Result& result);
   void plantTree(const Vec2& start, const Vec2& goal, bool use_dynamic);
-  Status search(bool use_dynamic, const Deadline& deadline, Result& result);
+  // `until_check`: pops before the first deadline check (0: at once).
+  Status search(bool use_dynamic, const Deadline& deadline, std::uint32_t until_check, Result& result);
   // The lazy edge check into a popped node; a blocked edge discovers its blockers and repairs
   // the node's parent (false).
   bool edgeIntoFree(std::int32_t v, bool use_dynamic);
+  // The polygons the edge into v (from its parent) runs through, into blockers_ (0: free).
+  std::size_t edgeBlockers(std::int32_t v, bool use_dynamic);
+  // The step for a blocked edge into v: the edge remembered, its blockers discovered, v
+  // re-parented.
+  void blockedEdgeInto(std::int32_t v, std::size_t blockers, bool use_dynamic);
   void close(std::int32_t v);
   void tracePath(const Vec2& start_in, const Vec2& goal_in, Result& result);
   bool edgeKnownBlocked(std::int32_t a, std::int32_t b) const;
@@ -187,6 +198,7 @@ class MinimalConstruct {
   std::vector<std::uint8_t> static_discovered_;  // persists across queries to the same goal
   std::vector<std::uint8_t> dynamic_discovered_;
   std::vector<std::uint32_t> blockers_;
+  std::size_t start_blockers_ = 0;  // startIsNextPop's count in blockers_ (kBlocked)
   std::vector<std::uint32_t> pending_;   // polygons waiting to be discovered
   std::vector<std::uint32_t> rediscover_;  // kept polygons, while a new graph is started
   std::vector<std::uint32_t> covering_;
@@ -202,6 +214,12 @@ class MinimalConstruct {
   std::uint32_t blocked_generation_ = 1;
   std::size_t blocked_count_ = 0;
 
+  // The last goal's nearest free point (query), valid until the obstacles or the oracle change.
+  Vec2 goal_free_in_{0.0, 0.0};
+  Vec2 goal_free_{0.0, 0.0};
+  bool goal_free_found_ = false;
+  bool goal_free_dynamic_ = false;
+  bool goal_free_valid_ = false;
   Vec2 goal_pos_{0.0, 0.0};   // the goal whose discovered polygons are kept
   bool have_goal_ = false;
   Vec2 target_pos_{0.0, 0.0};  // the start: the backward search's target, its heuristic's anchor

@@ -28,7 +28,13 @@ bool parseHeuristicKind(const char* text, HeuristicKind& out) {
   return false;
 }
 
-double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits) {
+namespace {
+
+// Eq. (4, 5) over a polyline whose segment i (from path[i - 1] to path[i]) has the length
+// and direction `segment(i, len, phi)` gives (phi only read for len >= 1e-9).
+template <typename Segment>
+double pathRtrOf(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits,
+                 Segment&& segment) {
   // Eq. (4, 5): RTR segments concatenated. Each segment is driven facing along it (forward,
   // v_max) or facing against it (backward, |v_min|); the two choices are the DP's states, so
   // turning around between segments costs its rotation like any other turn.
@@ -39,10 +45,9 @@ double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta
   double head_f = start_theta, head_b = start_theta;
   bool first = true;
   for (std::size_t i = 1; i < path.size(); ++i) {
-    const Vec2 d = path[i] - path[i - 1];
-    const double len = d.norm();
+    double len, phi;
+    segment(i, len, phi);
     if (len < 1e-9) continue;
-    const double phi = std::atan2(d.y(), d.x());
     const double fwd = phi, bwd = phi + kPi;
     double nf, nb;
     if (first) {
@@ -65,9 +70,59 @@ double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta
                   cost_b + std::abs(wrapAngle(goal_theta - head_b)) * inv_w);
 }
 
+void segmentOf(const Vec2& a, const Vec2& b, double& len, double& phi) {
+  const Vec2 d = b - a;
+  len = d.norm();
+  phi = std::atan2(d.y(), d.x());
+}
+
+}  // namespace
+
+double pathRtr(std::span<const Vec2> path, double start_theta, double goal_theta, const MotionLimits& limits) {
+  return pathRtrOf(path, start_theta, goal_theta, limits,
+                   [&](std::size_t i, double& len, double& phi) { segmentOf(path[i - 1], path[i], len, phi); });
+}
+
+double Heuristic::pathRtrCached(std::span<const Vec2> path, double start_theta) {
+  // Beyond its first segment a path runs along the search tree, the same segments for many
+  // states: their lengths and directions (a square root and an arc tangent each) are kept by
+  // the segment's end points, a pure function of them.
+  return pathRtrOf(path, start_theta, goal_.theta, limits_, [&](std::size_t i, double& len, double& phi) {
+    const Vec2& a = path[i - 1];
+    const Vec2& b = path[i];
+    if (i == 1) {
+      segmentOf(a, b, len, phi);
+      return;
+    }
+    std::uint64_t key[4];
+    std::memcpy(key, a.data(), 2 * sizeof(double));
+    std::memcpy(key + 2, b.data(), 2 * sizeof(double));
+    std::uint64_t hash = (key[0] * 0x9E3779B97F4A7C15ULL) ^ (key[1] * 0xC2B2AE3D27D4EB4FULL) ^
+                         (key[2] * 0x165667B19E3779F9ULL) ^ (key[3] * 0x27D4EB2F165667C5ULL);
+    hash ^= hash >> 31;
+    SegmentEntry& e = segments_[static_cast<std::size_t>(hash) & (kSegmentSlots - 1)];
+    if (e.valid && std::memcmp(e.key, key, sizeof key) == 0) {
+      len = e.len;
+      phi = e.phi;
+      return;
+    }
+    segmentOf(a, b, len, phi);
+    std::memcpy(e.key, key, sizeof key);
+    e.len = len;
+    e.phi = phi;
+    e.valid = true;
+  });
+}
+
 Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, const std::vector<Polygon>& inflated_static,
                      const LocalMapConfig& local, std::size_t max_obstacles)
-    : config_(config), limits_(limits), inflated_(3 * max_obstacles), views_(max_obstacles) {
+    : config_(config),
+      limits_(limits),
+      inflated_(3 * max_obstacles),
+      views_(max_obstacles),
+      memo_(kMemoSlots),
+      memo_path_(kMemoSlots * kMemoPath),
+      segments_(kSegmentSlots) {
   config_.dynamic_depth = std::clamp(config_.dynamic_depth, 0, 3);
   MinimalConstruct::Options opt;
   opt.max_dynamic_polygons = views_.size();
@@ -109,6 +164,10 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
   goal_ = goal;
   deadline_ = deadline;
   map_ = &map;
+  if (++memo_stamp_ == 0) {
+    for (MemoEntry& e : memo_) e.stamp = 0;
+    memo_stamp_ = 1;
+  }
   // The collision grid's clearance (this cycle's) may vouch for free segments of the local
   // paths: their obstacles reach at most local_reach_m beyond the real ones.
   clearance_ = config_.local_reach_m > 0.0 ? clearance : nullptr;
@@ -153,14 +212,39 @@ double Heuristic::lowerBound(const UnicycleState& s) const {
   return h + braking(s.v, limits_.a_max, v_top) + braking(s.w, limits_.b_max, limits_.w_max);
 }
 
+double Heuristic::hFromPath(const UnicycleState& s, std::span<const Vec2> path, double length) {
+  if (path.empty()) {
+    last_path_ = {};
+    // Unreachable G~: rank states by straight-line RTR, far behind any reachable state.
+    const Vec2 line[2] = {s.position(), goal_.position()};
+    return config_.unreachable_penalty_s + pathRtr(line, s.theta, goal_.theta, limits_);
+  }
+  last_path_ = path;
+  if (config_.kind == HeuristicKind::kPathEuclid) return length / limits_.v_max;
+  return pathRtrCached(path, s.theta);
+}
+
 double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
   const Vec2 p = s.position();
   const Vec2 g = goal_.position();
+  const bool dynamic = depth >= 1 && depth <= config_.dynamic_depth && has_dynamic_[static_cast<std::size_t>(depth - 1)];
+  // The answer depends on the point and on which searches answer it: a repeat is looked up.
+  std::uint64_t x_bits, y_bits;
+  std::memcpy(&x_bits, &p.x(), sizeof x_bits);
+  std::memcpy(&y_bits, &p.y(), sizeof y_bits);
+  const std::int32_t depth_key = dynamic ? depth : 0;
+  std::uint64_t hash = (x_bits * 0x9E3779B97F4A7C15ULL) ^ (y_bits * 0xC2B2AE3D27D4EB4FULL) ^ static_cast<std::uint64_t>(depth_key);
+  hash ^= hash >> 29;
+  const std::size_t slot = static_cast<std::size_t>(hash) & (kMemoSlots - 1);
+  MemoEntry& entry = memo_[slot];
+  if (entry.stamp == memo_stamp_ && entry.x_bits == x_bits && entry.y_bits == y_bits && entry.depth_key == depth_key) {
+    return hFromPath(s, std::span<const Vec2>(memo_path_).subspan(slot * kMemoPath, entry.count), entry.length);
+  }
   // The static path first (its tree is shared by all depths). Where the predicted obstacles
   // D'(t) leave it untouched it is also the shortest path among them (obstacles only make
   // paths longer), so the depth's dynamic search runs only for paths that D'(t) cuts.
   MinimalConstruct::Result r = staticSearch().query(p, g, false, deadline_);
-  const bool dynamic = depth >= 1 && depth <= config_.dynamic_depth && has_dynamic_[static_cast<std::size_t>(depth - 1)];
+  bool keep = r.status != MinimalConstruct::Status::kAborted;
   if (dynamic && r.status == MinimalConstruct::Status::kFound) {
     MinimalConstruct& search = dynamicSearch(static_cast<std::size_t>(depth - 1));
     const PolygonSet& d = search.dynamicObstacles();
@@ -172,17 +256,20 @@ double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
       // No way around the predicted obstacles (a person in the door), or no time left to
       // find it: keep the static path.
       if (around.status == MinimalConstruct::Status::kFound) r = around;
+      keep = keep && around.status != MinimalConstruct::Status::kAborted;
     }
   }
-  if (r.status != MinimalConstruct::Status::kFound) {
-    last_path_ = {};
-    // Unreachable G~: rank states by straight-line RTR, far behind any reachable state.
-    const Vec2 line[2] = {p, g};
-    return config_.unreachable_penalty_s + pathRtr(line, s.theta, goal_.theta, limits_);
+  const bool found = r.status == MinimalConstruct::Status::kFound;
+  if (keep && r.path.size() <= kMemoPath && (found || r.path.empty())) {
+    entry.x_bits = x_bits;
+    entry.y_bits = y_bits;
+    entry.depth_key = depth_key;
+    entry.stamp = memo_stamp_;
+    entry.length = r.length;
+    entry.count = found ? static_cast<std::uint32_t>(r.path.size()) : 0;
+    if (found) std::copy(r.path.begin(), r.path.end(), memo_path_.begin() + static_cast<std::ptrdiff_t>(slot * kMemoPath));
   }
-  last_path_ = r.path;
-  if (config_.kind == HeuristicKind::kPathEuclid) return r.length / limits_.v_max;
-  return pathRtr(r.path, s.theta, goal_.theta, limits_);
+  return hFromPath(s, found ? r.path : std::span<const Vec2>{}, r.length);
 }
 
 void Heuristic::buildDijkstra(const LocalMap& map, const CollisionChecker* clearance) {

@@ -10,6 +10,8 @@
 // the four Minimal Construct searches (static, and t = 1, 2, 3 steps ahead) keeps its
 // backward search tree from G~ for the whole cycle. A query then connects the state to the
 // tree and rarely expands anything: the tree is the per-cycle structure all queries share.
+// A point asked again in the same cycle (about one query in ten) is answered from a table
+// of this cycle's paths, and the tree's segments keep their lengths and directions.
 // The values are exactly the path-RTR values of the paper.
 
 #include "robot/robot_profile.hpp"
@@ -90,6 +92,7 @@ class Heuristic {
   std::span<const Vec2> lastPath() const { return last_path_; }
   // Forgets what the searches kept from earlier cycles (MinimalConstruct::forgetGoal).
   void forgetSearches() {
+    ++memo_stamp_;
     static_search_.forgetGoal();
     for (MinimalConstruct& mc : dynamic_search_) mc.forgetGoal();
     passage_static_.forgetGoal();
@@ -123,6 +126,36 @@ class Heuristic {
   std::vector<PolygonView> views_;
   std::span<const Vec2> last_path_;
   std::uint64_t queries_ = 0;
+
+  // This cycle's answers by exact start point and search (the static one, or the dynamic
+  // one of a depth): STAA* asks the same point again for about one state in ten (states
+  // reached by different actions, turns on the spot). A direct-mapped table sized at
+  // construction (no allocation in the cycle), emptied by prepare() through the stamp; a
+  // path longer than kMemoPath vertices, or an answer the deadline cut, is not kept.
+  struct MemoEntry {
+    std::uint64_t x_bits = 0, y_bits = 0;
+    double length = 0.0;
+    std::uint32_t stamp = 0;
+    std::int32_t depth_key = 0;
+    std::uint32_t count = 0;  // path vertices; 0: no path (unreachable G~)
+  };
+  static constexpr std::size_t kMemoSlots = 512;
+  static constexpr std::size_t kMemoPath = 12;
+  std::vector<MemoEntry> memo_;
+  std::vector<Vec2> memo_path_;
+  std::uint32_t memo_stamp_ = 1;
+  double hFromPath(const UnicycleState& s, std::span<const Vec2> path, double length);
+  // pathRtr to G~, with the lengths and directions of segments seen before looked up
+  // (direct-mapped, sized at construction; the same values, bit for bit).
+  struct SegmentEntry {
+    std::uint64_t key[4] = {0, 0, 0, 0};  // the end points' bits
+    double len = 0.0;
+    double phi = 0.0;
+    bool valid = false;
+  };
+  static constexpr std::size_t kSegmentSlots = 256;
+  std::vector<SegmentEntry> segments_;
+  double pathRtrCached(std::span<const Vec2> path, double start_theta);
 
   const CollisionChecker* clearance_ = nullptr;
   static bool clearSegment(const void* self, const Vec2& a, const Vec2& b);
