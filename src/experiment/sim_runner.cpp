@@ -1,11 +1,13 @@
 #include "experiment/sim_runner.hpp"
 
+#include "experiment/agent_camera.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <numeric>
 
 namespace staa {
@@ -30,6 +32,22 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   std::vector<Polygon> mover_polys(world.moverCount());
   std::vector<PolygonView> views(world.moverCount());
   std::vector<Vec2> velocities(world.moverCount());
+  // Depth: the robot's camera sees the movers as people 1.7 m tall; perception bounds their
+  // speed by the fastest of them.
+  constexpr double kPersonHeightM = 1.7;
+  std::unique_ptr<AgentCamera> camera;
+  std::vector<hal::PrismView> prisms(world.moverCount());
+  std::vector<PolygonView> seen_views(hal::ObstacleFrame::kMaxObstacles);
+  std::vector<Vec2> seen_velocities(hal::ObstacleFrame::kMaxObstacles);
+  std::vector<double> seen_turn_rates(hal::ObstacleFrame::kMaxObstacles);
+  if (options.obstacles == ObstacleSource::kDepth) {
+    DepthObstaclesConfig perception = agentPerceptionConfig(scenario.robot);
+    double fastest = 0.0;
+    for (std::size_t i = 0; i < world.moverCount(); ++i) fastest = std::max(fastest, world.mover(i).speed);
+    perception.max_speed_mps = std::max(perception.max_speed_mps, 1.25 * fastest);
+    perception.acceleration_mps2 = std::max(perception.acceleration_mps2, 1.0);
+    camera = std::make_unique<AgentCamera>(scenario.map, scenario.robot, perception, 1);
+  }
 
   SimResult result;
   std::vector<double> pops, succ, depth, plan_us, cycle_us, path_us;
@@ -43,7 +61,24 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
       views[i] = mover_polys[i];
       velocities[i] = world.moverVelocity(i);
     }
-    obstacles.set(views, velocities);
+    if (camera) {
+      for (std::size_t i = 0; i < world.moverCount(); ++i) {
+        prisms[i] = hal::PrismView{views[i], Vec2(0.0, 0.0), kPersonHeightM};
+      }
+      camera->perceive(world.time(), world.robot().pose, prisms);
+      std::size_t m = 0;
+      if (const hal::ObstacleFrame* f = camera->delivered(world.time())) {
+        for (; m < f->count; ++m) {
+          seen_views[m] = PolygonView(f->obstacles[m].vertices.data(), f->obstacles[m].n);
+          seen_velocities[m] = f->obstacles[m].velocity;
+          seen_turn_rates[m] = f->obstacles[m].turn_rate;
+        }
+      }
+      obstacles.set(std::span<const PolygonView>(seen_views.data(), m), std::span<const Vec2>(seen_velocities.data(), m),
+                    std::span<const double>(seen_turn_rates.data(), m));
+    } else {
+      obstacles.set(views, velocities);
+    }
     const RobotState& rs = world.robot();
     CycleInputs in;
     in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
@@ -68,6 +103,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
         ++result.frames_written;
       }
     }
+    if (camera) camera->aimHead(rs.pose, cycle.lastPath(), period);
     if (options.on_cycle) options.on_cycle(world, out, k);
     result.final_state = toString(out.state);
     if (out.state == CycleState::kReached) {
@@ -83,6 +119,10 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   result.collisions = world.collisionEpisodes();
   result.min_clearance_m = world.minClearance();
   result.final_pose = world.robot().pose;
+  if (camera) {
+    result.camera_frames = camera->frames();
+    result.camera_frames_lost = camera->framesLost();
+  }
   result.expansions = distributionOf(pops);
   result.successors = distributionOf(succ);
   result.depth = distributionOf(depth);

@@ -100,6 +100,10 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_o
   require("turn_min_speed_mps", c.turn_min_speed_mps, Range::atLeast(0.0, "m/s"));
   require("max_turn_rate_rps", c.max_turn_rate_rps, Range::atLeast(0.0, "rad/s"));
   requireCount("max_missed_frames", c.max_missed_frames, 0, 1000);
+  require("keep_unseen_s", c.keep_unseen_s, Range::closed(0.0, 60.0, "s"));
+  requireCount("confirm_frames", c.confirm_frames, 1, 1000);
+  require("max_growth_m", c.max_growth_m, Range::closed(0.0, 10.0, "m"));
+  require("hidden_depth_m", c.hidden_depth_m, Range::closed(0.0, 5.0, "m"));
   require("max_frame_gap_s", c.max_frame_gap_s, Range::above(0.0, "s"));
 }
 
@@ -136,7 +140,9 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   row_max_.assign(static_cast<std::size_t>(n_), -1);
   rows_.assign(static_cast<std::size_t>(n_), 0);
   corners_.assign(4 * static_cast<std::size_t>(n_), Vec2::Zero());
-  hull_.assign(4 * static_cast<std::size_t>(n_) + 1, Vec2::Zero());
+  hull_.assign(std::max<std::size_t>(4 * static_cast<std::size_t>(n_) + 1, 2 * hal::ObstacleFrame::kMaxVertices + 1),
+               Vec2::Zero());
+  extended_.assign(2 * hal::ObstacleFrame::kMaxVertices, Vec2::Zero());
 }
 
 // The sampled rays and, per ray, the depths whose points are in the band and in range.
@@ -201,14 +207,19 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
   out.dropped = 0;
   if (frame.has_mount) {
     useFrameMount(frame.mount);
+    frame_rotation_ = CameraModel::rotationOf(frame.mount);
+    frame_camera_ = frame_position_;
     backProject(frame, frame_rays_, frame_position_, robot, stats);
   } else {
+    frame_rotation_ = camera_.rotation();
+    frame_camera_ = camera_.position();
     backProject(frame, rays_, camera_.position(), robot, stats);
   }
   findClusters(robot, stats);
   outlineClusters(out);
   trackClusters(frame.stamp, out);
-  out.dropped = stats.clusters - out.count;
+  out.dropped = stats.clusters - kept_;
+  keepUnseenTracks(frame, robot, out);
   for (const Track& t : tracks_) stats.tracks += t.live ? 1 : 0;
   return stats;
 }
@@ -227,6 +238,7 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std:
   // In grid units: the camera's position, and each ray's turn by the robot's heading.
   const double inv_cell = 1.0 / cell;
   const Vec2 camera = robot.transform(camera_position.head<2>());
+  camera_map_ = camera;
   const double ax = (camera.x() - origin_.x()) * inv_cell, ay = (camera.y() - origin_.y()) * inv_cell;
   const double c = std::cos(robot.theta) * inv_cell * 0.001, s = std::sin(robot.theta) * inv_cell * 0.001;
   const double n = n_;
@@ -362,6 +374,18 @@ std::size_t DepthObstacleDetector::outline(const Cluster& cluster, std::span<Vec
   }
   std::size_t hull_n = convexHullInPlace(std::span<Vec2>(corners_.data(), m), std::span<Vec2>(hull_));
   hull_n = growToFewerVertices(std::span<Vec2>(hull_), hull_n, config_.max_vertices);
+  const Vec2 away = cluster.centroid - camera_map_;
+  if (config_.hidden_depth_m > 0.0 && hull_n > 0 && away.norm() > 0.0) {
+    // The side the camera cannot see: the outline and its copy shifted away from the camera.
+    const Vec2 shift = away.normalized() * config_.hidden_depth_m;
+    const std::size_t k = std::min(hull_n, extended_.size() / 2);
+    for (std::size_t i = 0; i < k; ++i) {
+      extended_[i] = hull_[i];
+      extended_[k + i] = hull_[i] + shift;
+    }
+    hull_n = convexHullInPlace(std::span<Vec2>(extended_.data(), 2 * k), std::span<Vec2>(hull_));
+    hull_n = growToFewerVertices(std::span<Vec2>(hull_), hull_n, config_.max_vertices);
+  }
   hull_n = std::min(hull_n, out.size());
   std::copy_n(hull_.begin(), hull_n, out.begin());
   return hull_n;
@@ -374,6 +398,7 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
                            static_cast<double>(stamp - last_stamp_) * 1e-9 > config_.max_frame_gap_s)) {
     resetTracks();
   }
+  const rt::Nanos previous_stamp = last_stamp_;  // -1 after a reset: no track is older
   last_stamp_ = stamp;
 
   std::array<Vec2, kMaxTracks> predicted{};
@@ -385,9 +410,17 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
   }
   for (std::size_t i = 0; i < kept_; ++i) clusters_[order_[i]].track = -1;
 
-  const double gate2 = config_.gate_m * config_.gate_m;
+  // The gate: gate_m, grown with the uncertainty of a track unseen for a frame or more.
+  std::array<double, kMaxTracks> gate2{};
+  for (std::size_t t = 0; t < kMaxTracks; ++t) {
+    if (!tracks_[t].live) continue;
+    const double unseen = static_cast<double>(stamp - tracks_[t].seen) * 1e-9;
+    const bool seen_last_frame = tracks_[t].seen >= previous_stamp;
+    const double gate = config_.gate_m + (seen_last_frame ? 0.0 : growth(tracks_[t], unseen));
+    gate2[t] = gate * gate;
+  }
   for (;;) {
-    double best = gate2;
+    double best = std::numeric_limits<double>::infinity();
     std::size_t best_i = kept_, best_t = kMaxTracks;
     for (std::size_t i = 0; i < kept_; ++i) {
       const Cluster& cl = clusters_[order_[i]];
@@ -395,7 +428,7 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
       for (std::size_t t = 0; t < kMaxTracks; ++t) {
         if (!tracks_[t].live || taken[t]) continue;
         const double d2 = (cl.centroid - predicted[t]).squaredNorm();
-        if (d2 <= best) {
+        if (d2 <= gate2[t] && d2 <= best) {
           best = d2;
           best_i = i;
           best_t = t;
@@ -413,31 +446,139 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
     filterTurnRate(tr, velocity_before, dt);
     tr.seen = stamp;
     tr.missed = 0;
+    ++tr.hits;
   }
 
-  // Tracks not seen this frame age; new clusters start tracks at rest.
-  for (std::size_t t = 0; t < kMaxTracks; ++t) {
-    if (!tracks_[t].live || taken[t]) continue;
-    if (++tracks_[t].missed > config_.max_missed_frames) tracks_[t] = Track{};
-  }
+  // New clusters start tracks at rest; every seen track keeps its outline.
   for (std::size_t i = 0; i < kept_; ++i) {
     Cluster& cl = clusters_[order_[i]];
-    if (cl.track >= 0) {
-      out.obstacles[i].velocity = tracks_[static_cast<std::size_t>(cl.track)].velocity;
-      out.obstacles[i].turn_rate = tracks_[static_cast<std::size_t>(cl.track)].turn_rate;
+    hal::ObstacleFrame::Obstacle& o = out.obstacles[i];
+    if (cl.track < 0) {
+      for (std::size_t t = 0; t < kMaxTracks; ++t) {
+        if (tracks_[t].live) continue;
+        // At rest, its position known to the centroid's noise, its velocity to about half the
+        // largest speed.
+        const double r = config_.centroid_noise_m, v = 0.5 * config_.max_speed_mps;
+        tracks_[t] = Track{true, cl.centroid, Vec2::Zero(), r * r, 0.0, v * v, stamp, 0, 0.0, 1};
+        cl.track = static_cast<int>(t);
+        break;
+      }
+    }
+    o.unseen_s = 0.0;
+    if (cl.track < 0) {  // every track taken: reported, not tracked
+      o.velocity = Vec2::Zero();
+      o.turn_rate = 0.0;
       continue;
     }
-    for (std::size_t t = 0; t < kMaxTracks; ++t) {
-      if (tracks_[t].live) continue;
-      // At rest, its position known to the centroid's noise, its velocity to about half the
-      // largest speed.
-      const double r = config_.centroid_noise_m, v = 0.5 * config_.max_speed_mps;
-      tracks_[t] = Track{true, cl.centroid, Vec2::Zero(), r * r, 0.0, v * v, stamp, 0};
-      cl.track = static_cast<int>(t);
-      break;
+    Track& tr = tracks_[static_cast<std::size_t>(cl.track)];
+    o.velocity = tr.velocity;
+    o.turn_rate = tr.turn_rate;
+    tr.outline_n = std::min(o.n, tr.outline.size());
+    for (std::size_t v = 0; v < tr.outline_n; ++v) tr.outline[v] = o.vertices[v] - tr.centroid;
+  }
+}
+
+double DepthObstacleDetector::growth(const Track& track, double t) const {
+  const double sigma_v = std::sqrt(std::max(0.0, track.p11));
+  return std::min(config_.max_growth_m, sigma_v * t + 0.5 * config_.acceleration_mps2 * t * t);
+}
+
+bool DepthObstacleDetector::inView(const hal::DepthFrame& frame, const Pose2& robot, const Vec2& p) const {
+  // Margins: a place this near an end of the range or an edge of the image may be seen or not.
+  constexpr double kRangeMargin = 0.3;  // m
+  constexpr double kEdgePixels = 8.0;
+  const hal::CameraIntrinsics& k = camera_.intrinsics();
+  const double c = std::cos(robot.theta), s = std::sin(robot.theta);
+  const Vec2 d = p - robot.position();
+  const Vec3 base(c * d.x() + s * d.y(), -s * d.x() + c * d.y(), 0.0);
+  const double horizontal = (base.head<2>() - frame_camera_.head<2>()).norm();
+  if (horizontal > config_.max_range_m - kRangeMargin) return false;
+  const int stride = config_.pixel_stride;
+  // Two heights of a body standing there (people, robots, furniture reach 0.8 m): seen when
+  // either is in the image and nothing nearer is in front of it.
+  for (const double h : {0.3, 0.8}) {
+    const double z = std::clamp(h, config_.min_height_m, config_.max_height_m);
+    const Vec3 body = frame_rotation_.transpose() * (Vec3(base.x(), base.y(), z) - frame_camera_);
+    const double depth = body.x();
+    if (!(depth > config_.min_depth_m + kRangeMargin)) continue;
+    const double u = k.cx - k.fx * body.y() / depth;
+    const double v = k.cy - k.fy * body.z() / depth;
+    if (!(u >= kEdgePixels && u < hal::DepthFrame::kWidth - kEdgePixels && v >= kEdgePixels &&
+          v < hal::DepthFrame::kHeight - kEdgePixels)) {
+      continue;
     }
-    out.obstacles[i].velocity = Vec2::Zero();
-    out.obstacles[i].turn_rate = 0.0;
+    // The nearest pixel perception samples (stride / 2 + i * stride).
+    const auto sampled = [stride](double x, int size) {
+      const int i = static_cast<int>(std::lround((x - stride / 2) / stride));
+      return std::clamp(stride / 2 + i * stride, 0, size - 1);
+    };
+    const int su = sampled(u, hal::DepthFrame::kWidth), sv = sampled(v, hal::DepthFrame::kHeight);
+    const std::uint16_t mm = frame.depth_mm[static_cast<std::size_t>(sv) * hal::DepthFrame::kWidth +
+                                            static_cast<std::size_t>(su)];
+    if (mm != 0 && static_cast<double>(mm) * 1e-3 < depth - config_.gate_m) continue;  // hidden
+    return true;
+  }
+  return false;
+}
+
+// Step 5: tracks not seen this frame. In view they are forgotten after max_missed_frames;
+// out of view (confirmed ones) after keep_unseen_s. Until then they are reported at their
+// predicted place, their outline grown with the uncertainty.
+void DepthObstacleDetector::keepUnseenTracks(const hal::DepthFrame& frame, const Pose2& robot,
+                                             hal::ObstacleFrame& out) {
+  const rt::Nanos stamp = frame.stamp;
+  for (Track& tr : tracks_) {
+    if (!tr.live || tr.seen == stamp) continue;
+    const double unseen = static_cast<double>(stamp - tr.seen) * 1e-9;
+    const Vec2 predicted = tr.centroid + tr.velocity * unseen;
+    const bool keep = config_.keep_unseen_s > 0.0 && tr.hits >= config_.confirm_frames;
+    if (keep && !inView(frame, robot, predicted)) {
+      if (unseen > config_.keep_unseen_s) {
+        tr = Track{};
+        continue;
+      }
+    } else if (++tr.missed > config_.max_missed_frames) {
+      tr = Track{};
+      continue;
+    }
+    if (tr.outline_n < 3) continue;
+    if (out.count == hal::ObstacleFrame::kMaxObstacles) {
+      ++out.dropped;
+      continue;
+    }
+    hal::ObstacleFrame::Obstacle& o = out.obstacles[out.count++];
+    o.n = tr.outline_n;
+    for (std::size_t v = 0; v < o.n; ++v) o.vertices[v] = tr.outline[v] + predicted;
+    growOutline(std::span<Vec2>(o.vertices.data(), o.n), growth(tr, unseen));
+    o.velocity = tr.velocity;
+    o.turn_rate = tr.turn_rate;
+    o.unseen_s = unseen;
+  }
+}
+
+void growOutline(std::span<Vec2> p, double r) {
+  const std::size_t n = p.size();
+  if (!(r > 0.0) || n < 3) return;
+  // Each vertex moves to where its two edges, each moved out by r, meet (the mitre), at most
+  // 4 r out (a corner sharper than about 30 degrees is cut there).
+  std::array<Vec2, hal::ObstacleFrame::kMaxVertices> normal{};
+  const std::size_t m = std::min(n, normal.size());
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vec2 e = p[(i + 1) % m] - p[i];
+    const double len = e.norm();
+    normal[i] = len > 0.0 ? Vec2(Vec2(e.y(), -e.x()) / len) : Vec2(0.0, 0.0);
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vec2 a = normal[(i + m - 1) % m], b = normal[i];
+    const Vec2 sum = a + b;
+    const double denom = 1.0 + a.dot(b);
+    // The mitre is r * |a + b| / (1 + a.b) out: more than 4 r when 1 + a.b < 1/8.
+    Vec2 offset = sum * (r / std::max(denom, 1.0 / 8.0));
+    if (denom < 1.0 / 8.0) {
+      const double len = sum.norm();
+      offset = len > 0.0 ? Vec2(sum * (4.0 * r / len)) : Vec2(a * r);
+    }
+    p[i] += offset;
   }
 }
 
