@@ -288,6 +288,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
           scorer.addCost(a.camera->renderUs(), a.camera->perceptionUs());
         }
         m = 0;
+        if (options.on_perceived) options.on_perceived(i, a.camera->delivered(now), a.camera->pan());
         if (const hal::ObstacleFrame* f = a.camera->delivered(now)) {
           for (std::size_t o = 0; o < f->count; ++o) {
             views[m] = PolygonView(f->obstacles[o].vertices.data(), f->obstacles[o].n);

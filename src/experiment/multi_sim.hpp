@@ -74,6 +74,9 @@ struct MultiSimOptions {
   std::function<void(const MultiWorld& world, std::span<const Vec2> current_goals, int cycle)> on_step_goals;
   // Called after every agent's control cycle with what it decided (diagnostics); may be empty.
   std::function<void(std::size_t agent, const CycleOutput& out)> on_cycle;
+  // kDepth: called before every camera agent's control cycle with the obstacle frame its
+  // planner gets (null before the first has arrived) and its head's pan (diagnostics).
+  std::function<void(std::size_t agent, const hal::ObstacleFrame* frame, double pan)> on_perceived;
 };
 
 // One counted contact episode, as it began: who touched what, how fast both were going in
