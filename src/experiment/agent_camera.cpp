@@ -1,10 +1,12 @@
 #include "experiment/agent_camera.hpp"
 
 #include "geometry/polygon.hpp"
+#include "robot/unicycle.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 namespace staa {
@@ -136,12 +138,17 @@ const hal::ObstacleFrame* AgentCamera::delivered(double time_s) const {
   return nullptr;
 }
 
-void AgentCamera::aimHead(const Pose2& robot, std::span<const Vec2> path, double dt) {
+void AgentCamera::aimHead(const Pose2& robot, double v, double w, std::span<const Vec2> path, double dt) {
   if (!(camera_.pan_max > 0.0)) return;
-  double target = 0.0;
-  if (path.size() >= 2) {
+  std::optional<Vec2> aim;
+  if (std::abs(v) >= kSlowMps) {
+    // Where the command's arc is look_ahead_m on (backwards too: the head looks back as far
+    // as it can).
+    const double t = camera_.look_ahead_m / std::abs(v);
+    aim = integrateArc(robot, v, w, t).position();
+  } else if (path.size() >= 2) {
     // The path's point look_ahead_m along it (its end when shorter).
-    Vec2 aim = path.back();
+    aim = path.back();
     double left = camera_.look_ahead_m;
     for (std::size_t k = 1; k < path.size(); ++k) {
       const double len = (path[k] - path[k - 1]).norm();
@@ -151,14 +158,14 @@ void AgentCamera::aimHead(const Pose2& robot, std::span<const Vec2> path, double
       }
       left -= len;
     }
+  }
+  double target = 0.0;
+  if (aim) {
     const Vec2 camera = robot.transform(Vec2(camera_.x, camera_.y));
-    const Vec2 d = aim - camera;
-    if (d.norm() > 0.05) {
-      target = std::clamp(wrapAngle(std::atan2(d.y(), d.x()) - robot.theta - camera_.yaw), -camera_.pan_max,
-                          camera_.pan_max);
-    } else {
-      target = pan_;
-    }
+    const Vec2 d = *aim - camera;
+    target = d.norm() > 0.05 ? std::clamp(wrapAngle(std::atan2(d.y(), d.x()) - robot.theta - camera_.yaw),
+                                          -camera_.pan_max, camera_.pan_max)
+                             : pan_;
   }
   const double step = camera_.pan_rate * dt;
   pan_ += std::clamp(target - pan_, -step, step);

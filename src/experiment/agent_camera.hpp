@@ -11,8 +11,10 @@
 //   - frames at rate_hz on a fixed schedule; frame_loss of them lost at random (the tracks
 //     coast through the gap); the obstacles reach the planner latency_s after the exposure
 //     (whole frames), as from staad's perception thread;
-//   - the head pans towards the direction of travel: the global path's point look_ahead_m
-//     ahead, within +-pan_max at up to pan_rate; the pan axis is vertical through the mount.
+//   - the head pans towards the direction of travel: where the robot will be look_ahead_m
+//     along the arc of its command (v, w), or, slower than kSlowMps (turning on the spot,
+//     starting), the global path's point look_ahead_m ahead; within +-pan_max at up to
+//     pan_rate; the pan axis is vertical through the mount.
 //     A pan is a turn of the camera about that axis, so a panned frame is rendered and
 //     perceived as the fixed mount on a base turned by the pan (the same rays, exactly the
 //     same frame; staad's frames with their own mount rebuild the rays instead).
@@ -68,9 +70,13 @@ class AgentCamera {
   const hal::ObstacleFrame& frame() const { return ring_[newest_]; }
   double frameTime() const { return ring_time_[newest_]; }
 
-  // Turns the head towards `path` (the global path from the robot on, map frame) for dt
-  // seconds at most pan_rate; back to the front without a path.
-  void aimHead(const Pose2& robot, std::span<const Vec2> path, double dt);
+  // Below this speed (m/s) the head looks along the path, not along the command's arc.
+  static constexpr double kSlowMps = 0.2;
+
+  // Turns the head for dt seconds at most pan_rate towards the direction of travel: the arc
+  // of the command (v, w) of the robot at `robot`, or `path` (the global path from the robot
+  // on, map frame) when slow; to the front when slow without a path.
+  void aimHead(const Pose2& robot, double v, double w, std::span<const Vec2> path, double dt);
   double pan() const { return pan_; }
   // The pose perception and the renderer see the frame from: the base turned by the pan about
   // the camera's vertical axis.

@@ -103,7 +103,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
         ++result.frames_written;
       }
     }
-    if (camera) camera->aimHead(rs.pose, cycle.lastPath(), period);
+    if (camera) camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, cycle.lastPath(), period);
     if (options.on_cycle) options.on_cycle(world, out, k);
     result.final_state = toString(out.state);
     if (out.state == CycleState::kReached) {

@@ -34,13 +34,13 @@ std::string number(double v) { return io::numberText(v); }
 
 // The constant-velocity Kalman filter of a track (the same gain for x and y): predict over
 // dt with white acceleration noise, then update with the measured centroid.
-void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, double dt) const {
+void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, double dt, double noise_m) const {
   const double q = config_.acceleration_mps2 * config_.acceleration_mps2;
   const double dt2 = dt * dt;
   const double p00 = tr.p00 + 2.0 * dt * tr.p01 + dt2 * tr.p11 + q * dt2 * dt2 / 4.0;
   const double p01 = tr.p01 + dt * tr.p11 + q * dt2 * dt / 2.0;
   const double p11 = tr.p11 + q * dt2;
-  const double innovation_var = p00 + config_.centroid_noise_m * config_.centroid_noise_m;
+  const double innovation_var = p00 + noise_m * noise_m;
   const double k0 = p00 / innovation_var, k1 = p01 / innovation_var;
   const Vec2 innovation = measured - (tr.centroid + tr.velocity * dt);
   tr.centroid += tr.velocity * dt + k0 * innovation;
@@ -94,6 +94,7 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_o
                static_cast<long long>(hal::ObstacleFrame::kMaxVertices), " (ObstacleFrame::kMaxVertices)");
   require("gate_m", c.gate_m, Range::above(0.0, "m"));
   require("centroid_noise_m", c.centroid_noise_m, Range::above(0.0, "m"));
+  require("truncated_noise_m", c.truncated_noise_m, Range::above(0.0, "m"));
   require("acceleration_mps2", c.acceleration_mps2, Range::above(0.0, "m/s^2"));
   require("max_speed_mps", c.max_speed_mps, Range::above(0.0, "m/s"));
   require("turn_rate_time_s", c.turn_rate_time_s, Range::above(0.0, "s"));
@@ -132,6 +133,7 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   link_ = static_cast<int>(std::floor(config_.cluster_gap_m / config_.cell_m + 1e-9));
   const auto cells = static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_);
   count_.assign(cells, 0);
+  edge_.assign(cells, 0);
   sum_x_.assign(cells, 0.0F);
   sum_y_.assign(cells, 0.0F);
   label_.assign(cells, -1);
@@ -168,9 +170,10 @@ void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3
       const double lo_mm = std::max(1.0, std::ceil(lo * 1000.0));
       const double hi_mm = std::min(65535.0, std::floor(hi * 1000.0));
       if (lo_mm > hi_mm) continue;  // this pixel never sees anything in the band
+      const bool edge = u < s || u >= hal::DepthFrame::kWidth - s;
       out.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
-                        static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u), static_cast<std::uint16_t>(lo_mm),
-                        static_cast<std::uint16_t>(hi_mm)});
+                        static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u) | (edge ? kEdgeRay : 0u),
+                        static_cast<std::uint16_t>(lo_mm), static_cast<std::uint16_t>(hi_mm)});
     }
   }
 }
@@ -232,6 +235,7 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std:
   gj0_ = mask_.cellIndex(robot.y) - n_ / 2;
   origin_ = Vec2(static_cast<double>(gi0_) * cell, static_cast<double>(gj0_) * cell);
   std::fill(count_.begin(), count_.end(), std::uint16_t{0});
+  std::fill(edge_.begin(), edge_.end(), std::uint8_t{0});
   std::fill(sum_x_.begin(), sum_x_.end(), 0.0F);
   std::fill(sum_y_.begin(), sum_y_.end(), 0.0F);
 
@@ -244,7 +248,7 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std:
   const double n = n_;
   std::size_t points = 0;
   for (const Ray& r : rays) {
-    const std::uint16_t d_mm = frame.depth_mm[r.pixel];
+    const std::uint16_t d_mm = frame.depth_mm[r.pixel & ~kEdgeRay];
     if (d_mm < r.min_mm || d_mm > r.max_mm) continue;
     const double d = d_mm;
     const double gx = ax + d * (c * r.x - s * r.y);
@@ -253,6 +257,7 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std:
     const std::size_t k = static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) + static_cast<std::size_t>(gx);
     if (count_[k] == std::numeric_limits<std::uint16_t>::max()) continue;
     ++count_[k];
+    if (r.pixel & kEdgeRay) edge_[k] = 1;
     sum_x_[k] += static_cast<float>(gx);
     sum_y_[k] += static_cast<float>(gy);
     ++points;
@@ -289,9 +294,11 @@ void DepthObstacleDetector::findClusters(const Pose2& robot, DepthObstaclesStats
     queue_[tail++] = seed;
     std::uint64_t points = 0;
     double sx = 0.0, sy = 0.0;
+    bool truncated = false;
     for (std::uint32_t head = first; head < tail; ++head) {
       const std::uint32_t k = queue_[head];
       points += count_[k];
+      truncated = truncated || edge_[k] != 0;
       sx += sum_x_[k];
       sy += sum_y_[k];
       const int gx = static_cast<int>(k % static_cast<std::uint32_t>(n));
@@ -318,6 +325,7 @@ void DepthObstacleDetector::findClusters(const Pose2& robot, DepthObstaclesStats
     cl.centroid = origin_ + config_.cell_m * Vec2(sx * inv, sy * inv);
     cl.distance = (cl.centroid - robot.position()).norm();
     cl.track = -1;
+    cl.truncated = truncated;
   }
 
   // The nearest kMaxObstacles, nearest first (ties in scan order, so the result is the same
@@ -442,7 +450,7 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
     cl.track = static_cast<int>(best_t);
     const double dt = static_cast<double>(stamp - tr.seen) * 1e-9;
     const Vec2 velocity_before = tr.velocity;
-    filterCentroid(tr, cl.centroid, dt);
+    filterCentroid(tr, cl.centroid, dt, cl.truncated ? config_.truncated_noise_m : config_.centroid_noise_m);
     filterTurnRate(tr, velocity_before, dt);
     tr.seen = stamp;
     tr.missed = 0;
@@ -458,7 +466,8 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
         if (tracks_[t].live) continue;
         // At rest, its position known to the centroid's noise, its velocity to about half the
         // largest speed.
-        const double r = config_.centroid_noise_m, v = 0.5 * config_.max_speed_mps;
+        const double r = cl.truncated ? config_.truncated_noise_m : config_.centroid_noise_m;
+        const double v = 0.5 * config_.max_speed_mps;
         tracks_[t] = Track{true, cl.centroid, Vec2::Zero(), r * r, 0.0, v * v, stamp, 0, 0.0, 1};
         cl.track = static_cast<int>(t);
         break;

@@ -85,6 +85,10 @@ struct DepthObstaclesConfig {
   // centroids. centroid_noise_m: how much a centroid jitters from frame to frame (depth noise,
   // and parts of a surface coming into or going out of view as things move).
   double centroid_noise_m = 0.03;
+  // A cluster at the image's left or right edge is cut off by it: its centroid moves with the
+  // edge as the body enters or leaves the view, not with the body. Its centroid is trusted
+  // this little (m) instead.
+  double truncated_noise_m = 0.3;
   // How quickly an obstacle may change its velocity (m/s^2; people: about 1).
   double acceleration_mps2 = 1.0;
   // Speeds are clamped to this (m/s): faster is an association slip, not a person.
@@ -168,15 +172,17 @@ class DepthObstacleDetector {
   // its point lies inside the height band and range, so the per-pixel test is two compares.
   struct Ray {
     float x, y;
-    std::uint32_t pixel;
+    std::uint32_t pixel;  // its index in the frame, | kEdgeRay in the image's first or last column sampled
     std::uint16_t min_mm, max_mm;
   };
+  static constexpr std::uint32_t kEdgeRay = 1u << 31;
   struct Cluster {
     std::uint32_t first = 0, last = 0;  // its cells: queue_[first, last)
     std::uint32_t points = 0;
     Vec2 centroid{0.0, 0.0};  // of its points, map frame
     double distance = 0.0;    // centroid to the robot
     int track = -1;
+    bool truncated = false;   // some of its points come from the image's left or right edge
   };
   struct Track {
     bool live = false;
@@ -210,7 +216,7 @@ class DepthObstacleDetector {
   // How far a track unseen for t seconds may be from its prediction.
   double growth(const Track& track, double t) const;
   std::size_t outline(const Cluster& cluster, std::span<Vec2> out);
-  void filterCentroid(Track& track, const Vec2& measured, double dt) const;
+  void filterCentroid(Track& track, const Vec2& measured, double dt, double noise_m) const;
   void filterTurnRate(Track& track, const Vec2& velocity_before, double dt) const;
 
   DepthObstaclesConfig config_;
@@ -227,6 +233,7 @@ class DepthObstacleDetector {
   std::int64_t gi0_ = 0, gj0_ = 0;  // the grid's lower-left cell on the map lattice (this frame)
   Vec2 origin_{0.0, 0.0};           // its corner in the map frame
   std::vector<std::uint16_t> count_;
+  std::vector<std::uint8_t> edge_;    // per cell: a point from the image's left or right edge
   std::vector<float> sum_x_, sum_y_;  // point coordinates relative to origin_
   std::vector<std::int32_t> label_;   // -1: no obstacle; 0: unvisited; > 0: cluster id
   std::vector<std::uint32_t> queue_;  // flood fill queue, also the clusters' cell lists

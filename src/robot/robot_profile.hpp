@@ -41,8 +41,9 @@ struct DepthCameraProfile {
   double frame_loss = 0.0;
   // From the exposure to the obstacles in the planner (s): whole frames at rate_hz.
   double latency_s = 0.0;
-  // The head pans towards the direction of travel (the global path's point look_ahead_m
-  // ahead) within +-pan_max (rad) at up to pan_rate (rad/s); pan_max 0: a fixed camera.
+  // The head pans towards the direction of travel (where the robot will be look_ahead_m on,
+  // experiment/agent_camera.hpp) within +-pan_max (rad) at up to pan_rate (rad/s); pan_max 0:
+  // a fixed camera.
   double pan_max = 0.0;
   double pan_rate = 1.0;
   double look_ahead_m = 1.5;
