@@ -66,6 +66,8 @@ class AgentCamera {
   // The newest perceived frame whose obstacles have reached the planner by `time_s`
   // (latency_s after its exposure); null before the first.
   const hal::ObstacleFrame* delivered(double time_s) const;
+  // The last depth image rendered (only the pixels perception samples are set).
+  const hal::DepthFrame& image() const { return *image_; }
   // The last frame perceived (not delayed), and its exposure time.
   const hal::ObstacleFrame& frame() const { return ring_[newest_]; }
   double frameTime() const { return ring_time_[newest_]; }
