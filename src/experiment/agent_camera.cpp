@@ -72,6 +72,7 @@ DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile) {
   // The body's narrower side: seen from any side, at least that much of it is hidden.
   const Box box = boundingBox(profile.footprint);
   p.hidden_depth_m = std::min(box.max.x() - box.min.x(), box.max.y() - box.min.y());
+  p.self_clearance_m = profile.circumradius();
   return p;
 }
 
@@ -168,6 +169,12 @@ void AgentCamera::aimHead(const Pose2& robot, double v, double w, std::span<cons
                              : pan_;
   }
   const double step = camera_.pan_rate * dt;
+  if (camera_.scan > 0.0) {
+    // Towards the side of the sweep; at it (or where the limit stops it), the other side.
+    const double side = std::clamp(target + sweep_ * camera_.scan, -camera_.pan_max, camera_.pan_max);
+    if (std::abs(side - pan_) < 0.5 * step) sweep_ = -sweep_;
+    target = std::clamp(target + sweep_ * camera_.scan, -camera_.pan_max, camera_.pan_max);
+  }
   pan_ += std::clamp(target - pan_, -step, step);
 }
 

@@ -13,8 +13,9 @@
 //     (whole frames), as from staad's perception thread;
 //   - the head pans towards the direction of travel: where the robot will be look_ahead_m
 //     along the arc of its command (v, w), or, slower than kSlowMps (turning on the spot,
-//     starting), the global path's point look_ahead_m ahead; within +-pan_max at up to
-//     pan_rate; the pan axis is vertical through the mount.
+//     starting), the global path's point look_ahead_m ahead, sweeping `scan` to either side of
+//     it and back; within +-pan_max at up to pan_rate; the pan axis is vertical through the
+//     mount.
 //     A pan is a turn of the camera about that axis, so a panned frame is rendered and
 //     perceived as the fixed mount on a base turned by the pan (the same rays, exactly the
 //     same frame; staad's frames with their own mount rebuild the rays instead).
@@ -107,6 +108,7 @@ class AgentCamera {
   double next_due_s_ = 0.0;
   SplitMix64 loss_rng_;
   double pan_ = 0.0;
+  double sweep_ = 1.0;  // the side the scan heads for: +1 left, -1 right
   std::uint64_t frames_ = 0;
   std::uint64_t lost_ = 0;
   std::uint64_t sequence_ = 0;

@@ -73,7 +73,8 @@ Json cameraJson(const RobotProfile& robot) {
   j["grazing_deg"] = c.grazing_deg;
   j["frame_loss"] = c.frame_loss;
   j["latency_s"] = c.latency_s;
-  j["head"] = Json{{"pan_max", c.pan_max}, {"pan_rate", c.pan_rate}, {"look_ahead_m", c.look_ahead_m}};
+  j["head"] = Json{{"pan_max", c.pan_max}, {"pan_rate", c.pan_rate}, {"look_ahead_m", c.look_ahead_m},
+                   {"scan", c.scan}};
   return j;
 }
 
@@ -102,6 +103,8 @@ Json perceptionConfigJson(const DepthObstaclesConfig& p) {
   j["confirm_frames"] = p.confirm_frames;
   j["max_growth_m"] = p.max_growth_m;
   j["hidden_depth_m"] = p.hidden_depth_m;
+  j["self_clearance_m"] = p.self_clearance_m;
+  j["truncated_noise_m"] = p.truncated_noise_m;
   j["max_frame_gap_s"] = p.max_frame_gap_s;
   return j;
 }

@@ -1,6 +1,7 @@
 #include "perception/depth_obstacles.hpp"
 
 #include "geometry/convex.hpp"
+#include "geometry/polygon.hpp"
 #include "io/config_rules.hpp"
 
 #include <algorithm>
@@ -105,6 +106,7 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_o
   requireCount("confirm_frames", c.confirm_frames, 1, 1000);
   require("max_growth_m", c.max_growth_m, Range::closed(0.0, 10.0, "m"));
   require("hidden_depth_m", c.hidden_depth_m, Range::closed(0.0, 5.0, "m"));
+  require("self_clearance_m", c.self_clearance_m, Range::closed(0.0, 5.0, "m"));
   require("max_frame_gap_s", c.max_frame_gap_s, Range::above(0.0, "s"));
 }
 
@@ -531,10 +533,15 @@ bool DepthObstacleDetector::inView(const hal::DepthFrame& frame, const Pose2& ro
 }
 
 // Step 5: tracks not seen this frame. In view they are forgotten after max_missed_frames;
-// out of view (confirmed ones) after keep_unseen_s. Until then they are reported at their
-// predicted place, their outline grown with the uncertainty.
+// out of view (confirmed ones) after keep_unseen_s, except a standing one in the camera's
+// near blind zone, which stays while it is there (the robot beside it cannot see it, and has
+// not left it). Until then they are reported at their predicted place, their outline grown
+// with the uncertainty, but never over the robot itself (self_clearance_m from the base
+// centre): an outline predicted into the robot is not there (the robot would have met it)
+// and is forgotten.
 void DepthObstacleDetector::keepUnseenTracks(const hal::DepthFrame& frame, const Pose2& robot,
                                              hal::ObstacleFrame& out) {
+  constexpr double kNearZoneMargin = 0.3;  // m beyond min_depth_m: about where readings begin
   const rt::Nanos stamp = frame.stamp;
   for (Track& tr : tracks_) {
     if (!tr.live || tr.seen == stamp) continue;
@@ -542,7 +549,9 @@ void DepthObstacleDetector::keepUnseenTracks(const hal::DepthFrame& frame, const
     const Vec2 predicted = tr.centroid + tr.velocity * unseen;
     const bool keep = config_.keep_unseen_s > 0.0 && tr.hits >= config_.confirm_frames;
     if (keep && !inView(frame, robot, predicted)) {
-      if (unseen > config_.keep_unseen_s) {
+      const bool near_standing = tr.velocity.norm() < config_.turn_min_speed_mps &&
+                                 (predicted - camera_map_).norm() < config_.min_depth_m + kNearZoneMargin;
+      if (unseen > config_.keep_unseen_s && !near_standing) {
         tr = Track{};
         continue;
       }
@@ -555,13 +564,26 @@ void DepthObstacleDetector::keepUnseenTracks(const hal::DepthFrame& frame, const
       ++out.dropped;
       continue;
     }
-    hal::ObstacleFrame::Obstacle& o = out.obstacles[out.count++];
+    hal::ObstacleFrame::Obstacle& o = out.obstacles[out.count];
     o.n = tr.outline_n;
     for (std::size_t v = 0; v < o.n; ++v) o.vertices[v] = tr.outline[v] + predicted;
-    growOutline(std::span<Vec2>(o.vertices.data(), o.n), growth(tr, unseen));
+    double r = growth(tr, unseen);
+    if (config_.self_clearance_m > 0.0) {
+      const PolygonView outline(o.vertices.data(), o.n);
+      const double away = locatePoint(robot.position(), outline) == Containment::kOutside
+                              ? distanceToEdges(robot.position(), outline)
+                              : 0.0;
+      if (away < config_.self_clearance_m) {
+        tr = Track{};
+        continue;
+      }
+      r = std::min(r, away - config_.self_clearance_m);
+    }
+    growOutline(std::span<Vec2>(o.vertices.data(), o.n), r);
     o.velocity = tr.velocity;
     o.turn_rate = tr.turn_rate;
     o.unseen_s = unseen;
+    ++out.count;
   }
 }
 

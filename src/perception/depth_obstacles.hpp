@@ -116,6 +116,10 @@ struct DepthObstaclesConfig {
   // The camera sees only the near side of a body: each outline is extended this far (m) away
   // from the camera, for the side it cannot see. 0: the visible cells only.
   double hidden_depth_m = 0.0;
+  // The robot's own radius about its base centre (the pose process() is given): an unseen
+  // track's outline is grown no nearer than this, and one predicted nearer is forgotten (the
+  // robot would have met it). 0: not checked.
+  double self_clearance_m = 0.0;
   // A gap between frame stamps longer than this (or a stamp going backwards) forgets every
   // track: the velocities would be stale.
   double max_frame_gap_s = 0.5;

@@ -66,11 +66,12 @@ DepthCameraProfile readCamera(const io::ConfigValue& node) {
   c.grazing_deg = optionalNumber(node, "grazing_deg", c.grazing_deg, io::Range::leftOpen(0.0, 90.0, "degrees"));
   c.frame_loss = optionalNumber(node, "frame_loss", c.frame_loss, io::Range::rightOpen(0.0, 1.0, {}, "a fraction of the frames"));
   c.latency_s = optionalNumber(node, "latency_s", c.latency_s, io::Range::closed(0.0, 1.0, "s"));
-  const io::ConfigValue head = node.section("head", {"pan_max", "pan_rate", "look_ahead_m"});
+  const io::ConfigValue head = node.section("head", {"pan_max", "pan_rate", "look_ahead_m", "scan"});
   if (head.present()) {
     c.pan_max = head.required("pan_max", "how far the head pans each way, rad").number(io::Range::closed(0.0, kPi, "rad"));
     c.pan_rate = optionalNumber(head, "pan_rate", c.pan_rate, io::Range::above(0.0, "rad/s"));
     c.look_ahead_m = optionalNumber(head, "look_ahead_m", c.look_ahead_m, io::Range::above(0.0, "m"));
+    c.scan = optionalNumber(head, "scan", c.scan, io::Range::closed(0.0, kPi, "rad"));
   }
   return c;
 }
@@ -127,6 +128,7 @@ DepthCameraProfile paperAgentCamera() {
   c.pan_max = 2.5;
   c.pan_rate = 2.0;
   c.look_ahead_m = 1.5;
+  c.scan = 0.6;
   return c;
 }
 

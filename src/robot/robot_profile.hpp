@@ -47,6 +47,9 @@ struct DepthCameraProfile {
   double pan_max = 0.0;
   double pan_rate = 1.0;
   double look_ahead_m = 1.5;
+  // The head sweeps this far (rad) to either side of the direction of travel and back, at
+  // pan_rate: a wider view than the camera's, each side seen every 4 scan / pan_rate s. 0: none.
+  double scan = 0.0;
 };
 
 struct RobotProfile {

@@ -38,6 +38,7 @@ RobotProfile idealAgent() {
   p.camera.grazing_deg = 90.0;
   p.camera.frame_loss = 0.0;
   p.camera.latency_s = 0.0;
+  p.camera.scan = 0.0;
   return p;
 }
 
@@ -142,6 +143,32 @@ TEST(AgentCamera, TheHeadFollowsTheCommandsArcWithinItsLimitsAndRate) {
   AgentCamera still(map, fixed, agentPerceptionConfig(fixed), 1);
   still.aimHead(robot, 1.0, 1.0, {}, kDt);
   EXPECT_EQ(still.pan(), 0.0);
+}
+
+TEST(AgentCamera, AScanningHeadSweepsAroundTheDirectionOfTravel) {
+  RobotProfile agent = idealAgent();
+  agent.camera.scan = 0.6;  // at 2 rad/s: from side to side in 0.6 s
+  AgentCamera camera(room(), agent, agentPerceptionConfig(agent), 1);
+  const Pose2 robot{5.0, 5.0, 0.0};
+  double lo = 0.0, hi = 0.0;
+  int turns = 0;
+  double previous = 0.0, direction = 0.0;
+  for (int k = 0; k < 90; ++k) {  // 3 s driving straight on
+    camera.aimHead(robot, 1.0, 0.0, {}, kDt);
+    const double d = camera.pan() - previous;
+    if (k > 0 && d * direction < 0.0) ++turns;
+    if (d != 0.0) direction = d;
+    previous = camera.pan();
+    if (k >= 15) {  // after the first sweep out
+      lo = std::min(lo, camera.pan());
+      hi = std::max(hi, camera.pan());
+    }
+    EXPECT_LE(std::abs(camera.pan()), 0.6 + 1e-9);
+  }
+  EXPECT_NEAR(lo, -0.6, 1e-9);
+  EXPECT_NEAR(hi, 0.6, 1e-9);
+  // 0.3 s out, then a turn every 0.6 s: 5 turns in 3 s.
+  EXPECT_EQ(turns, 5);
 }
 
 TEST(AgentCamera, AProfileWithoutACameraIsRefusedNamingIt) {

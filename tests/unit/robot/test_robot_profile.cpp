@@ -65,7 +65,7 @@ TEST(RobotProfile, ShippedPaperAgentEqualsPaperAgentProfile) {
            {"dropout", a.dropout, b.dropout}, {"grazing", a.grazing_deg, b.grazing_deg},
            {"frame_loss", a.frame_loss, b.frame_loss}, {"latency", a.latency_s, b.latency_s},
            {"pan_max", a.pan_max, b.pan_max}, {"pan_rate", a.pan_rate, b.pan_rate},
-           {"look_ahead", a.look_ahead_m, b.look_ahead_m}}) {
+           {"look_ahead", a.look_ahead_m, b.look_ahead_m}, {"scan", a.scan, b.scan}}) {
     EXPECT_EQ(x, y) << name;
   }
   // An Xtion: 58 x 45 degrees, 1 m up looking 0.3 rad down, one 30 Hz frame of latency.
