@@ -125,8 +125,12 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   const std::size_t sampled =
       static_cast<std::size_t>((hal::DepthFrame::kWidth / config_.pixel_stride + 1) *
                                (hal::DepthFrame::kHeight / config_.pixel_stride + 1));
-  rays_.reserve(sampled);
-  frame_rays_.reserve(sampled);
+  const std::size_t edge_rays = 2 * static_cast<std::size_t>(hal::DepthFrame::kHeight / config_.pixel_stride + 1);
+  for (Rays* r : {&rays_, &frame_rays_}) {
+    r->rays.reserve(sampled);
+    r->edge.reserve(edge_rays);
+  }
+  edge_cells_.reserve(edge_rays);
   fillRays(camera_.rotation(), camera_.position(), rays_);
   // The grid reaches max_range_m from the camera wherever the camera sits on the robot
   // (within kMaxGridSide: validated above).
@@ -150,8 +154,9 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
 }
 
 // The sampled rays and, per ray, the depths whose points are in the band and in range.
-void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3& c, std::vector<Ray>& out) const {
-  out.clear();
+void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3& c, Rays& out) const {
+  out.rays.clear();
+  out.edge.clear();
   const int s = config_.pixel_stride;
   for (int v = s / 2; v < hal::DepthFrame::kHeight; v += s) {
     for (int u = s / 2; u < hal::DepthFrame::kWidth; u += s) {
@@ -172,10 +177,10 @@ void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3
       const double lo_mm = std::max(1.0, std::ceil(lo * 1000.0));
       const double hi_mm = std::min(65535.0, std::floor(hi * 1000.0));
       if (lo_mm > hi_mm) continue;  // this pixel never sees anything in the band
-      const bool edge = u < s || u >= hal::DepthFrame::kWidth - s;
-      out.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
-                        static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u) | (edge ? kEdgeRay : 0u),
-                        static_cast<std::uint16_t>(lo_mm), static_cast<std::uint16_t>(hi_mm)});
+      if (u < s || u >= hal::DepthFrame::kWidth - s) out.edge.push_back(static_cast<std::uint32_t>(out.rays.size()));
+      out.rays.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
+                             static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u),
+                             static_cast<std::uint16_t>(lo_mm), static_cast<std::uint16_t>(hi_mm)});
     }
   }
 }
@@ -192,7 +197,8 @@ void DepthObstacleDetector::useFrameMount(const hal::CameraMount& m) {
   const bool finite = std::isfinite(m.x) && std::isfinite(m.y) && std::isfinite(m.z) && std::isfinite(m.roll) &&
                       std::isfinite(m.pitch) && std::isfinite(m.yaw);
   if (!finite || !(m.z > 0.0)) {
-    frame_rays_.clear();
+    frame_rays_.rays.clear();
+    frame_rays_.edge.clear();
     return;
   }
   fillRays(CameraModel::rotationOf(m), frame_position_, frame_rays_);
@@ -230,14 +236,15 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
 }
 
 // Step 1: pixels -> points in the band -> counts (and point sums) per grid cell.
-void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std::vector<Ray>& rays,
-                                        const Vec3& camera_position, const Pose2& robot, DepthObstaclesStats& stats) {
+void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const Rays& rays, const Vec3& camera_position,
+                                        const Pose2& robot, DepthObstaclesStats& stats) {
   const double cell = config_.cell_m;
   gi0_ = mask_.cellIndex(robot.x) - n_ / 2;
   gj0_ = mask_.cellIndex(robot.y) - n_ / 2;
   origin_ = Vec2(static_cast<double>(gi0_) * cell, static_cast<double>(gj0_) * cell);
   std::fill(count_.begin(), count_.end(), std::uint16_t{0});
-  std::fill(edge_.begin(), edge_.end(), std::uint8_t{0});
+  for (const std::uint32_t k : edge_cells_) edge_[k] = 0;
+  edge_cells_.clear();
   std::fill(sum_x_.begin(), sum_x_.end(), 0.0F);
   std::fill(sum_y_.begin(), sum_y_.end(), 0.0F);
 
@@ -249,8 +256,19 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std:
   const double c = std::cos(robot.theta) * inv_cell * 0.001, s = std::sin(robot.theta) * inv_cell * 0.001;
   const double n = n_;
   std::size_t points = 0;
-  for (const Ray& r : rays) {
-    const std::uint16_t d_mm = frame.depth_mm[r.pixel & ~kEdgeRay];
+  // The cell of ray r's point, or -1 when its depth is outside its band or the grid.
+  const auto cellOf = [&](const Ray& r) -> std::ptrdiff_t {
+    const std::uint16_t d_mm = frame.depth_mm[r.pixel];
+    if (d_mm < r.min_mm || d_mm > r.max_mm) return -1;
+    const double d = d_mm;
+    const double gx = ax + d * (c * r.x - s * r.y);
+    const double gy = ay + d * (s * r.x + c * r.y);
+    if (!(gx >= 0.0 && gx < n && gy >= 0.0 && gy < n)) return -1;
+    return static_cast<std::ptrdiff_t>(static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) +
+                                       static_cast<std::size_t>(gx));
+  };
+  for (const Ray& r : rays.rays) {
+    const std::uint16_t d_mm = frame.depth_mm[r.pixel];
     if (d_mm < r.min_mm || d_mm > r.max_mm) continue;
     const double d = d_mm;
     const double gx = ax + d * (c * r.x - s * r.y);
@@ -259,10 +277,17 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std:
     const std::size_t k = static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) + static_cast<std::size_t>(gx);
     if (count_[k] == std::numeric_limits<std::uint16_t>::max()) continue;
     ++count_[k];
-    if (r.pixel & kEdgeRay) edge_[k] = 1;
     sum_x_[k] += static_cast<float>(gx);
     sum_y_[k] += static_cast<float>(gy);
     ++points;
+  }
+  // The cells of the points from the image's side columns (a few hundred rays): a cluster
+  // with one of them is cut off by the edge.
+  for (const std::uint32_t i : rays.edge) {
+    const std::ptrdiff_t k = cellOf(rays.rays[i]);
+    if (k < 0 || edge_[static_cast<std::size_t>(k)] != 0) continue;
+    edge_[static_cast<std::size_t>(k)] = 1;
+    edge_cells_.push_back(static_cast<std::uint32_t>(k));
   }
   stats.points = points;
 }

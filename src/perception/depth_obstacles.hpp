@@ -176,10 +176,14 @@ class DepthObstacleDetector {
   // its point lies inside the height band and range, so the per-pixel test is two compares.
   struct Ray {
     float x, y;
-    std::uint32_t pixel;  // its index in the frame, | kEdgeRay in the image's first or last column sampled
+    std::uint32_t pixel;
     std::uint16_t min_mm, max_mm;
   };
-  static constexpr std::uint32_t kEdgeRay = 1u << 31;
+  // A camera's rays, and which of them sample the image's first or last column.
+  struct Rays {
+    std::vector<Ray> rays;
+    std::vector<std::uint32_t> edge;  // indices into rays
+  };
   struct Cluster {
     std::uint32_t first = 0, last = 0;  // its cells: queue_[first, last)
     std::uint32_t points = 0;
@@ -206,10 +210,10 @@ class DepthObstacleDetector {
 
   // The sampled rays of a camera with this rotation and position (base frame) into `out`,
   // within its capacity (reserved at construction: no allocation).
-  void fillRays(const Eigen::Matrix3d& rotation, const Vec3& position, std::vector<Ray>& out) const;
+  void fillRays(const Eigen::Matrix3d& rotation, const Vec3& position, Rays& out) const;
   void useFrameMount(const hal::CameraMount& mount);
-  void backProject(const hal::DepthFrame& frame, const std::vector<Ray>& rays, const Vec3& camera_position,
-                   const Pose2& robot, DepthObstaclesStats& stats);
+  void backProject(const hal::DepthFrame& frame, const Rays& rays, const Vec3& camera_position, const Pose2& robot,
+                   DepthObstaclesStats& stats);
   void findClusters(const Pose2& robot, DepthObstaclesStats& stats);
   void outlineClusters(hal::ObstacleFrame& out);
   void trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out);
@@ -226,9 +230,9 @@ class DepthObstacleDetector {
   DepthObstaclesConfig config_;
   CameraModel camera_;
   StaticMapMask mask_;
-  std::vector<Ray> rays_;
+  Rays rays_;
   // The rays of the last frame's own mount (frame.has_mount), and that mount.
-  std::vector<Ray> frame_rays_;
+  Rays frame_rays_;
   hal::CameraMount frame_mount_;
   Vec3 frame_position_{0.0, 0.0, 0.0};
   bool frame_rays_built_ = false;
@@ -238,6 +242,7 @@ class DepthObstacleDetector {
   Vec2 origin_{0.0, 0.0};           // its corner in the map frame
   std::vector<std::uint16_t> count_;
   std::vector<std::uint8_t> edge_;    // per cell: a point from the image's left or right edge
+  std::vector<std::uint32_t> edge_cells_;  // the cells edge_ marks (cleared next frame)
   std::vector<float> sum_x_, sum_y_;  // point coordinates relative to origin_
   std::vector<std::int32_t> label_;   // -1: no obstacle; 0: unvisited; > 0: cluster id
   std::vector<std::uint32_t> queue_;  // flood fill queue, also the clusters' cell lists
