@@ -73,6 +73,9 @@ DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile) {
   const Box box = boundingBox(profile.footprint);
   p.hidden_depth_m = std::min(box.max.x() - box.min.x(), box.max.y() - box.min.y());
   p.self_clearance_m = profile.circumradius();
+  // A new track's velocity is unknown (0, give or take half the top speed): its outline grows
+  // by what that covers in a third of a second, shrinking as the velocity settles.
+  p.uncertainty_horizon_s = 1.0 / 3.0;
   return p;
 }
 
@@ -125,7 +128,16 @@ bool AgentCamera::perceive(double time_s, const Pose2& robot, std::span<const ha
   ring_time_[newest_] = time_s;
   ++taken_;
   ++frames_;
+  view_.look(time_s, view.theta + camera_.yaw, 0.5 * camera_.fov_h_deg * kPi / 180.0);
   return true;
+}
+
+double AgentCamera::limitSpeed(double time_s, const Pose2& robot, double v, double w) const {
+  if (std::abs(v) <= kBlindSpeedMps) return v;
+  const Vec2 ahead = integrateArc(robot, v, w, camera_.look_ahead_m / std::abs(v)).position();
+  const Vec2 d = ahead - robot.transform(Vec2(camera_.x, camera_.y));
+  if (view_.unseenFor(time_s, std::atan2(d.y(), d.x())) <= kViewMemoryS) return v;
+  return std::copysign(kBlindSpeedMps, v);
 }
 
 const hal::ObstacleFrame* AgentCamera::delivered(double time_s) const {

@@ -19,6 +19,10 @@
 //     A pan is a turn of the camera about that axis, so a panned frame is rendered and
 //     perceived as the fixed mount on a base turned by the pan (the same rays, exactly the
 //     same frame; staad's frames with their own mount rebuild the rays instead).
+//   - what the camera has looked at lately (ViewMemory) limits the robot's speed: faster than
+//     kBlindSpeedMps only towards where the command's arc goes that the camera has seen within
+//     kViewMemoryS (limitSpeed; the controller's command is limited after the cycle, the head
+//     turns to where the controller wants to go, and the speed follows it there).
 // Not modelled: the projector's shadow beside near edges, motion blur, the time between the
 // exposure and the pose the frame is placed at (the sim's poses are exact).
 //
@@ -31,6 +35,7 @@
 #include "hal/obstacles.hpp"
 #include "map/polygon_map.hpp"
 #include "perception/depth_obstacles.hpp"
+#include "perception/view_memory.hpp"
 #include "robot/robot_profile.hpp"
 #include "world/sim_depth_camera.hpp"
 
@@ -75,12 +80,18 @@ class AgentCamera {
 
   // Below this speed (m/s) the head looks along the path, not along the command's arc.
   static constexpr double kSlowMps = 0.2;
+  // The speed (m/s) in a direction the camera has not seen within kViewMemoryS (s).
+  static constexpr double kBlindSpeedMps = 0.3;
+  static constexpr double kViewMemoryS = 0.5;
 
   // Turns the head for dt seconds at most pan_rate towards the direction of travel: the arc
   // of the command (v, w) of the robot at `robot`, or `path` (the global path from the robot
   // on, map frame) when slow; to the front when slow without a path.
   void aimHead(const Pose2& robot, double v, double w, std::span<const Vec2> path, double dt);
   double pan() const { return pan_; }
+  // The command's speed v, or +-kBlindSpeedMps when faster towards a direction (where the arc
+  // of (v, w) is look_ahead_m on) the camera has not seen within kViewMemoryS.
+  double limitSpeed(double time_s, const Pose2& robot, double v, double w) const;
   // The pose perception and the renderer see the frame from: the base turned by the pan about
   // the camera's vertical axis.
   Pose2 viewPose(const Pose2& robot) const;
@@ -109,6 +120,7 @@ class AgentCamera {
   SplitMix64 loss_rng_;
   double pan_ = 0.0;
   double sweep_ = 1.0;  // the side the scan heads for: +1 left, -1 right
+  ViewMemory view_;
   std::uint64_t frames_ = 0;
   std::uint64_t lost_ = 0;
   std::uint64_t sequence_ = 0;

@@ -319,7 +319,11 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       const PlannerBudget budget = options.budget.make();
       const CycleOutput out = a.cycle->step(in, budget);
       commands[i] = AgentCommand{out.v_cmd, out.w_cmd};
-      if (a.camera) a.camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, a.cycle->lastPath(), period);
+      if (a.camera) {
+        // The head turns to where the controller wants to go; the speed goes there once seen.
+        commands[i].v = a.camera->limitSpeed(world.time(), rs.pose, out.v_cmd, out.w_cmd);
+        a.camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, a.cycle->lastPath(), period);
+      }
       a.last_speed = std::abs(rs.v);
       a.last_tier = out.planned && a.evaluated && !a.controller ? out.plan.brake_safety_tier : -1;
       if (options.on_cycle) options.on_cycle(i, out);

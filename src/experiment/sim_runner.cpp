@@ -103,7 +103,11 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
         ++result.frames_written;
       }
     }
-    if (camera) camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, cycle.lastPath(), period);
+    double v_cmd = out.v_cmd;
+    if (camera) {
+      v_cmd = camera->limitSpeed(world.time(), rs.pose, out.v_cmd, out.w_cmd);
+      camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, cycle.lastPath(), period);
+    }
     if (options.on_cycle) options.on_cycle(world, out, k);
     result.final_state = toString(out.state);
     if (out.state == CycleState::kReached) {
@@ -112,7 +116,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
       result.time_to_goal_s = world.time();
       break;
     }
-    world.step(period, out.v_cmd, out.w_cmd);
+    world.step(period, v_cmd, out.w_cmd);
   }
   result.duration_s = world.time();
   if (!result.reached_goal) result.time_to_goal_s = world.time();

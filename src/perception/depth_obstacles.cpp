@@ -107,6 +107,7 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_o
   require("max_growth_m", c.max_growth_m, Range::closed(0.0, 10.0, "m"));
   require("hidden_depth_m", c.hidden_depth_m, Range::closed(0.0, 5.0, "m"));
   require("self_clearance_m", c.self_clearance_m, Range::closed(0.0, 5.0, "m"));
+  require("uncertainty_horizon_s", c.uncertainty_horizon_s, Range::closed(0.0, 10.0, "s"));
   require("max_frame_gap_s", c.max_frame_gap_s, Range::above(0.0, "s"));
 }
 
@@ -226,6 +227,7 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
     frame_camera_ = camera_.position();
     backProject(frame, rays_, camera_.position(), robot, stats);
   }
+  robot_ = robot.position();
   findClusters(robot, stats);
   outlineClusters(out);
   trackClusters(frame.stamp, out);
@@ -511,7 +513,18 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
     o.turn_rate = tr.turn_rate;
     tr.outline_n = std::min(o.n, tr.outline.size());
     for (std::size_t v = 0; v < tr.outline_n; ++v) tr.outline[v] = o.vertices[v] - tr.centroid;
+    if (config_.uncertainty_horizon_s > 0.0) {
+      const double r = std::min(config_.max_growth_m, std::sqrt(std::max(0.0, tr.p11)) * config_.uncertainty_horizon_s);
+      growOutline(std::span<Vec2>(o.vertices.data(), o.n), clearOfSelf(std::span<const Vec2>(o.vertices.data(), o.n), r));
+    }
   }
+}
+
+double DepthObstacleDetector::clearOfSelf(std::span<const Vec2> outline, double r) const {
+  if (!(config_.self_clearance_m > 0.0) || outline.size() < 3) return r;
+  const PolygonView poly(outline.data(), outline.size());
+  const double away = locatePoint(robot_, poly) == Containment::kOutside ? distanceToEdges(robot_, poly) : 0.0;
+  return std::max(0.0, std::min(r, away - config_.self_clearance_m));
 }
 
 double DepthObstacleDetector::growth(const Track& track, double t) const {

@@ -116,6 +116,10 @@ struct DepthObstaclesConfig {
   // The camera sees only the near side of a body: each outline is extended this far (m) away
   // from the camera, for the side it cannot see. 0: the visible cells only.
   double hidden_depth_m = 0.0;
+  // A track's velocity is uncertain (a new one's most): its outline is grown by the distance
+  // that uncertainty (the filter's standard deviation) covers in this time (s), at most
+  // max_growth_m. 0: not grown.
+  double uncertainty_horizon_s = 0.0;
   // The robot's own radius about its base centre (the pose process() is given): an unseen
   // track's outline is grown no nearer than this, and one predicted nearer is forgotten (the
   // robot would have met it). 0: not checked.
@@ -223,6 +227,8 @@ class DepthObstacleDetector {
   bool inView(const hal::DepthFrame& frame, const Pose2& robot, const Vec2& p) const;
   // How far a track unseen for t seconds may be from its prediction.
   double growth(const Track& track, double t) const;
+  // r, or less so that the outline grown by it stays self_clearance_m from the base centre.
+  double clearOfSelf(std::span<const Vec2> outline, double r) const;
   std::size_t outline(const Cluster& cluster, std::span<Vec2> out);
   void filterCentroid(Track& track, const Vec2& measured, double dt, double noise_m) const;
   void filterTurnRate(Track& track, const Vec2& velocity_before, double dt) const;
@@ -254,6 +260,7 @@ class DepthObstacleDetector {
   Eigen::Matrix3d frame_rotation_ = Eigen::Matrix3d::Identity();
   Vec3 frame_camera_{0.0, 0.0, 0.0};
   Vec2 camera_map_{0.0, 0.0};
+  Vec2 robot_{0.0, 0.0};  // this frame's base centre (map frame)
   std::array<Cluster, kMaxClusters> clusters_{};
   std::size_t cluster_count_ = 0;
   std::array<std::uint16_t, kMaxClusters> order_{};

@@ -125,7 +125,7 @@ DepthCameraProfile paperAgentCamera() {
   c.grazing_deg = 80.0;
   c.frame_loss = 0.01;
   c.latency_s = 1.0 / 30.0;
-  c.pan_max = 2.5;
+  c.pan_max = 2.8;
   c.pan_rate = 2.0;
   c.look_ahead_m = 1.5;
   c.scan = 0.6;

@@ -293,7 +293,7 @@ camera:
   mount: {x: 0.0, y: 0.0, z: 1.0, pitch: 0.3}
   fov_deg: [58, 45]
   range_m: [0.5, 4.5]
-  head: {pan_max: 2.5, pan_rate: 2.0}
+  head: {pan_max: 2.8, pan_rate: 2.0}
 )";
 }
 

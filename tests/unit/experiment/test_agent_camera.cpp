@@ -123,7 +123,7 @@ TEST(AgentCamera, ObstaclesReachThePlannerLatencyAfterTheExposureAndLostFramesAr
 
 TEST(AgentCamera, TheHeadFollowsTheCommandsArcWithinItsLimitsAndRate) {
   const PolygonMap map = room();
-  const RobotProfile agent = idealAgent();  // pan +-2.5 rad at 2 rad/s
+  const RobotProfile agent = idealAgent();  // pan +-2.8 rad at 2 rad/s
   AgentCamera camera(map, agent, agentPerceptionConfig(agent), 1);
   const Pose2 robot{5.0, 5.0, 0.0};
   // Driving a left turn at 1 m/s, 1 rad/s: the arc's point 1.5 m on is 0.75 rad to the left.
@@ -131,9 +131,9 @@ TEST(AgentCamera, TheHeadFollowsTheCommandsArcWithinItsLimitsAndRate) {
   EXPECT_NEAR(camera.pan(), 2.0 * kDt, 1e-12);  // one step of the rate
   for (int k = 0; k < 30; ++k) camera.aimHead(robot, 1.0, 1.0, {}, kDt);
   EXPECT_NEAR(camera.pan(), 0.75, 1e-6);
-  // Reversing straight: it looks back as far as it can (+-2.5 rad), from where it is.
+  // Reversing straight: it looks back as far as it can (+-2.8 rad), from where it is.
   for (int k = 0; k < 90; ++k) camera.aimHead(robot, -1.0, 0.0, {}, kDt);
-  EXPECT_NEAR(std::abs(camera.pan()), 2.5, 1e-9);
+  EXPECT_NEAR(std::abs(camera.pan()), 2.8, 1e-9);
   // Standing without a path: to the front again.
   for (int k = 0; k < 90; ++k) camera.aimHead(robot, 0.0, 0.0, {}, kDt);
   EXPECT_EQ(camera.pan(), 0.0);
@@ -169,6 +169,29 @@ TEST(AgentCamera, AScanningHeadSweepsAroundTheDirectionOfTravel) {
   EXPECT_NEAR(hi, 0.6, 1e-9);
   // 0.3 s out, then a turn every 0.6 s: 5 turns in 3 s.
   EXPECT_EQ(turns, 5);
+}
+
+TEST(AgentCamera, TheRobotDrivesFastOnlyWhereItsCameraHasLookedLately) {
+  const PolygonMap map = room();
+  const RobotProfile agent = idealAgent();
+  AgentCamera camera(map, agent, agentPerceptionConfig(agent), 1);
+  const Pose2 robot{5.0, 5.0, 0.0};
+  const std::vector<hal::PrismView> none;
+  // Nothing seen yet: every direction is blind.
+  EXPECT_EQ(camera.limitSpeed(0.0, robot, 2.0, 0.0), AgentCamera::kBlindSpeedMps);
+  EXPECT_EQ(camera.limitSpeed(0.0, robot, 0.2, 0.0), 0.2);  // slow is always allowed
+  ASSERT_TRUE(camera.perceive(0.0, robot, none));  // looking ahead
+  EXPECT_EQ(camera.limitSpeed(0.1, robot, 2.0, 0.0), 2.0);
+  EXPECT_EQ(camera.limitSpeed(0.1, robot, 2.0, 0.5), 2.0);  // a gentle left arc: ahead
+  EXPECT_EQ(camera.limitSpeed(0.1, robot, -1.0, 0.0), -AgentCamera::kBlindSpeedMps);  // backwards: unseen
+  EXPECT_EQ(camera.limitSpeed(0.1, robot, 2.0, 3.0), AgentCamera::kBlindSpeedMps);    // a sharp left turn
+  // What it saw ages: 0.6 s later the way ahead counts as unseen again.
+  EXPECT_EQ(camera.limitSpeed(0.6, robot, 2.0, 0.0), AgentCamera::kBlindSpeedMps);
+  // The head turns to where the controller wants to go (backwards), a frame is taken: allowed.
+  for (int k = 1; k <= 60; ++k) camera.aimHead(robot, -1.0, 0.0, {}, kDt);  // 1.4 s at 2 rad/s
+  EXPECT_NEAR(std::abs(camera.pan()), 2.8, 1e-9);
+  ASSERT_TRUE(camera.perceive(2.0, robot, none));
+  EXPECT_EQ(camera.limitSpeed(2.0, robot, -1.0, 0.0), -1.0);
 }
 
 TEST(AgentCamera, AProfileWithoutACameraIsRefusedNamingIt) {
