@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs every Debian 12 package that building, testing and running staa needs.
+# Installs every Debian 12 package that building, testing and running staa needs, and the
+# npm package @mcap/core into tests/mcap (the flight recorder's independent reader).
 #   --aarch64  also the cross compiler, qemu-user and mmdebstrap, and an arm64 sysroot of the
 #              project's own with the arm64 libraries (the `aarch64` preset builds against it):
 #              $STAA_AARCH64_SYSROOT, default /opt/staa-sysroot-arm64. Never arm64 packages on
@@ -20,6 +21,7 @@ done
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libccd-dev libpolyclipping-dev libyaml-cpp-dev
+  libyaml-dev  # libyaml: the YAML reader (src/io/yaml_tree.cpp); yaml-cpp writes
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
   clang-14 libclang-rt-14-dev  # the libFuzzer targets (tests/fuzz, the fuzz preset)
@@ -43,7 +45,7 @@ AARCH64_HOST_PACKAGES=(
 # headers and link files (/usr/aarch64-linux-gnu); the run-time libc and libstdc++ that qemu
 # loads come into the sysroot as dependencies of these.
 SYSROOT_PACKAGES=(
-  libeigen3-dev libccd-dev libpolyclipping-dev libyaml-cpp-dev
+  libeigen3-dev libccd-dev libpolyclipping-dev libyaml-cpp-dev libyaml-dev
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
 )
 SYSROOT="${STAA_AARCH64_SYSROOT:-/opt/staa-sysroot-arm64}"
@@ -71,6 +73,12 @@ missing=()
 for p in "${wanted[@]}"; do
   installed_for_host "$p" || missing+=("$p")
 done
+# Node.js and npm for the flight recorder's independent MCAP reader (tests/mcap: the MCAP
+# project's @mcap/core reads our recordings). Debian's, unless a node and npm are there already
+# (another packaging of them would conflict with Debian's npm).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  missing+=(nodejs npm)
+fi
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#wanted[@]} packages present"
@@ -83,6 +91,16 @@ else
   # Plain names: apt takes the host's architecture (and replaces an arm64 instance of a
   # package that is not multi-arch).
   $SUDO apt-get -o DPkg::Lock::Timeout=300 install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# @mcap/core at the version tests/mcap/package-lock.json pins, into tests/mcap/node_modules
+# (the tests look for it there and skip with a message without it).
+mcap_dir="$(cd "$(dirname "$0")/.." && pwd)/tests/mcap"
+if [ -d "$mcap_dir/node_modules/@mcap/core" ]; then
+  echo "install-deps: @mcap/core present in tests/mcap"
+else
+  echo "install-deps: npm ci in tests/mcap (@mcap/core)"
+  npm ci --prefix "$mcap_dir" --no-audit --no-fund --loglevel=error
 fi
 
 [ "$aarch64" -eq 1 ] || exit 0

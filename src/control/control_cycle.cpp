@@ -79,6 +79,19 @@ void ControlCycle::setGoal(const Pose2& goal) {
   state_ = CycleState::kDriving;
   held_valid_ = false;
   path_misses_ = 0;
+  // A new goal starts the searches afresh, so that a recording replays exactly from here.
+  path_.forgetSearches();
+  staa_.planner().forgetSearches();
+  searches_fresh_ = true;
+  ++goal_changes_;
+}
+
+void ControlCycle::restoreMemory(const Memory& memory) {
+  goal_ = memory.goal;
+  state_ = memory.state;
+  path_misses_ = memory.path_misses;
+  held_valid_ = memory.held_valid && memory.held_path.size() <= held_path_.capacity();
+  if (held_valid_) held_path_.assign(memory.held_path.begin(), memory.held_path.end());
 }
 
 void ControlCycle::clearGoal() {
@@ -86,6 +99,7 @@ void ControlCycle::clearGoal() {
   state_ = CycleState::kIdle;
   held_valid_ = false;
   path_misses_ = 0;
+  ++goal_changes_;
 }
 
 CycleOutput ControlCycle::stop(const UnicycleState& robot, CycleState state) {
@@ -159,6 +173,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
 
   CycleOutput out;
   // 1. Global path, around the inflated moving obstacles where possible.
+  searches_fresh_ = false;
   std::int64_t t0 = clock_();
   const std::size_t n = std::min(obstacles.size(), views_.size());
   out.obstacles_dropped = obstacles.dropped() + (obstacles.size() - n);

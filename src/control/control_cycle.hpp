@@ -104,6 +104,27 @@ class ControlCycle {
 
   CycleOutput step(const CycleInputs& inputs, PlannerBudget budget);
 
+  // What a step carries to the next besides the searches' trees: the goal, the state and the
+  // path held through failed queries. The flight recorder records it every cycle; a replay
+  // from the middle of a recording restores it. The trees (the global path's and the
+  // heuristic's Minimal Construct searches) are forgotten by setGoal: from a cycle with
+  // searchesFresh() a replay repeats the work, and with it the deadline's cut, exactly.
+  struct Memory {
+    std::optional<Pose2> goal;
+    CycleState state = CycleState::kIdle;
+    bool held_valid = false;
+    int path_misses = 0;
+    std::span<const Vec2> held_path;  // valid until the next step
+  };
+  Memory memory() const { return {goal_, state_, held_valid_, path_misses_, held_path_}; }
+  // A recorded memory back in place (replay only: a held path beyond the reserved capacity
+  // is not held). The searches are left as they are.
+  void restoreMemory(const Memory& memory);
+  // No search has run since the cycle was made or its goal set.
+  bool searchesFresh() const { return searches_fresh_; }
+  // How many times setGoal or clearGoal was called (the recorder notes each change).
+  std::uint64_t goalChanges() const { return goal_changes_; }
+
   const LocalMap& localMap() const { return local_; }
   const GlobalPathPlanner& pathPlanner() const { return path_; }
   std::span<const Vec2> lastPath() const { return last_path_; }
@@ -154,6 +175,8 @@ class ControlCycle {
   std::vector<Vec2> held_path_;
   bool held_valid_ = false;
   int path_misses_ = 0;
+  bool searches_fresh_ = true;
+  std::uint64_t goal_changes_ = 0;
 };
 
 }  // namespace staa

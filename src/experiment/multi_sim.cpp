@@ -4,10 +4,12 @@
 #include "experiment/agent_camera.hpp"
 #include "control/pd_controller.hpp"
 #include "geometry/splitmix64.hpp"
+#include "record/recorder.hpp"
 #include "world/multi_world.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 
@@ -258,6 +260,24 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   std::vector<std::size_t> others(n);
   std::vector<std::uint32_t> pixels(n);
   PerceptionScorer scorer(by_camera ? n : 0);
+  std::unique_ptr<record::SimRecording> recording;
+  if (!options.record_path.empty()) {
+    record::Session session = options.record_session;
+    session.control = agents[0]->cycle->config();
+    session.robot = robot;
+    session.map = map;
+    for (std::size_t i = 0; i < n; ++i) {
+      session.agents.push_back({static_cast<std::uint16_t>(i), agents[i]->controller ? agents[i]->controller->name() : "staa"});
+    }
+    record::RecordLimits limits;
+    // Depth: what perception made of a frame (up to ObstacleFrame's obstacles and vertices).
+    limits.obstacles = by_camera ? seam : std::max<std::size_t>(1, n - 1);
+    if (by_camera) limits.vertices = std::max(limits.vertices, hal::ObstacleFrame::kMaxVertices);
+    limits.vertices = std::max<std::size_t>(limits.vertices, robot.footprint.size());
+    limits.path_points = 4096;
+    limits.trajectory = 256;
+    recording = std::make_unique<record::SimRecording>(options.record_path, session, limits);
+  }
 
   MultiSimResult result;
   const double period = 1.0 / options.rate_hz;
@@ -271,23 +291,23 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     // Every agent decides on the same snapshot of the world.
     for (std::size_t i = 0; i < n; ++i) {
       SimAgent& a = *agents[i];
+      std::size_t m = 0;  // the others seen: what the planner gets (and the recorder keeps)
       if (a.perceives && a.camera) {
         // What its camera saw: a frame rendered now, its obstacles once they have arrived.
-        std::size_t m = 0;
+        std::size_t bodies = 0;
         for (std::size_t j = 0; j < n; ++j) {
           if (j == i) continue;
-          prisms[m] = hal::PrismView{PolygonView(world.footprint(j)), Vec2(0.0, 0.0), robot.height_m};
-          others[m] = j;
-          ++m;
+          prisms[bodies] = hal::PrismView{PolygonView(world.footprint(j)), Vec2(0.0, 0.0), robot.height_m};
+          others[bodies] = j;
+          ++bodies;
         }
         const double now = world.time();
-        if (a.camera->perceive(now, world.agent(i).pose, std::span<const hal::PrismView>(prisms.data(), m),
-                               std::span<std::uint32_t>(pixels.data(), m))) {
-          scorer.score(world, i, now, a.camera->frame(), std::span<const std::size_t>(others.data(), m),
-                       std::span<const std::uint32_t>(pixels.data(), m));
+        if (a.camera->perceive(now, world.agent(i).pose, std::span<const hal::PrismView>(prisms.data(), bodies),
+                               std::span<std::uint32_t>(pixels.data(), bodies))) {
+          scorer.score(world, i, now, a.camera->frame(), std::span<const std::size_t>(others.data(), bodies),
+                       std::span<const std::uint32_t>(pixels.data(), bodies));
           scorer.addCost(a.camera->renderUs(), a.camera->perceptionUs());
         }
-        m = 0;
         if (options.on_perceived) options.on_perceived(i, a.camera->delivered(now), a.camera->pan());
         if (const hal::ObstacleFrame* f = a.camera->delivered(now)) {
           for (std::size_t o = 0; o < f->count; ++o) {
@@ -301,7 +321,6 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
                    std::span<const double>(turn_rates.data(), m));
       } else if (a.perceives) {
         // Ground truth: the others' footprints, velocities and turn rates.
-        std::size_t m = 0;
         for (std::size_t j = 0; j < n; ++j) {
           if (j == i) continue;
           views[m] = world.footprint(j);
@@ -316,13 +335,24 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       CycleInputs in;
       in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
       in.obstacles = a.perceives ? &a.seen : nullptr;
-      const PlannerBudget budget = options.budget.make();
+      PlannerBudget budget = options.budget.make();
+      if (recording) {
+        record::CycleRecorder& rec = recording->agent(i);
+        rec.obstacles({std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m),
+                       std::span<const double>(turn_rates.data(), m)});
+        budget = rec.before(*a.cycle, options.budget, &steadyClockNs);
+      }
       const CycleOutput out = a.cycle->step(in, budget);
       commands[i] = AgentCommand{out.v_cmd, out.w_cmd};
       if (a.camera) {
         // The head turns to where the controller wants to go; the speed goes there once seen.
         commands[i].v = a.camera->limitSpeed(world.time(), rs.pose, out.v_cmd, out.w_cmd);
         a.camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, a.cycle->lastPath(), period);
+      }
+      if (recording) {
+        // The command to the base is the camera's limited one; the cycle's own is beside it.
+        recording->agent(i).after(*a.cycle, record::simNanos(world.time()), in.robot, record::StepKind::kStepped, 0, &out,
+                                  {commands[i].v, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
       }
       a.last_speed = std::abs(rs.v);
       a.last_tier = out.planned && a.evaluated && !a.controller ? out.plan.brake_safety_tier : -1;
@@ -352,6 +382,13 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
         c.other_tier = agents[static_cast<std::size_t>(c.other)]->last_tier;
       }
       result.contacts.push_back(c);
+      if (recording) {
+        char text[256];
+        std::snprintf(text, sizeof text,
+                      R"({"t":%.17g,"agent":%d,"other":%d,"speed":%.17g,"other_speed":%.17g,"tier":%d,"other_tier":%d})",
+                      c.time_s, c.agent, c.other, c.speed, c.other_speed, c.tier, c.other_tier);
+        recording->event("/contacts", record::simNanos(c.time_s), text);
+      }
     }
 
     // Goals passed within the radius count; the agent gets its next one.
@@ -375,6 +412,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     }
   }
 
+  if (recording) recording->close();
   result.duration_s = world.time();
   result.agents.resize(n);
   for (std::size_t i = 0; i < n; ++i) {

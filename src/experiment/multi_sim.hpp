@@ -77,6 +77,11 @@ struct MultiSimOptions {
   // kDepth: called before every camera agent's control cycle with the obstacle frame its
   // planner gets (null before the first has arrived) and its head's pan (diagnostics).
   std::function<void(std::size_t agent, const hal::ObstacleFrame* frame, double pan)> on_perceived;
+  // Every agent's cycles recorded into this MCAP file, the contacts beside them (staa-sim
+  // --record; empty: off). kDepth: the obstacles recorded are those perception gave the
+  // planner. The runner completes the session.
+  std::filesystem::path record_path;
+  record::Session record_session;
 };
 
 // One counted contact episode, as it began: who touched what, how fast both were going in

@@ -1,6 +1,7 @@
 #include "experiment/sim_runner.hpp"
 
 #include "experiment/agent_camera.hpp"
+#include "record/recorder.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 
@@ -40,6 +41,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   std::vector<PolygonView> seen_views(hal::ObstacleFrame::kMaxObstacles);
   std::vector<Vec2> seen_velocities(hal::ObstacleFrame::kMaxObstacles);
   std::vector<double> seen_turn_rates(hal::ObstacleFrame::kMaxObstacles);
+  std::size_t seen = 0;  // obstacles in the seen_ spans this cycle
   if (options.obstacles == ObstacleSource::kDepth) {
     DepthObstaclesConfig perception = agentPerceptionConfig(scenario.robot);
     double fastest = 0.0;
@@ -47,6 +49,23 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     perception.max_speed_mps = std::max(perception.max_speed_mps, 1.25 * fastest);
     perception.acceleration_mps2 = std::max(perception.acceleration_mps2, 1.0);
     camera = std::make_unique<AgentCamera>(scenario.map, scenario.robot, perception, 1);
+  }
+  std::unique_ptr<record::SimRecording> recording;
+  if (!options.record_path.empty()) {
+    record::Session session = options.record_session;
+    session.control = cycle.config();
+    session.robot = scenario.robot;
+    session.map = scenario.map;
+    session.agents = {{0, options.controller != nullptr ? options.controller->name() : "staa"}};
+    record::RecordLimits limits;
+    // Depth: what perception made of a frame (up to ObstacleFrame's obstacles and vertices).
+    limits.obstacles = std::max<std::size_t>(1, world.moverCount());
+    if (camera) limits.obstacles = std::max(limits.obstacles, hal::ObstacleFrame::kMaxObstacles);
+    if (camera) limits.vertices = std::max(limits.vertices, hal::ObstacleFrame::kMaxVertices);
+    for (std::size_t i = 0; i < world.moverCount(); ++i) limits.vertices = std::max(limits.vertices, world.moverPolygon(i).size());
+    limits.path_points = 4096;
+    limits.trajectory = 256;
+    recording = std::make_unique<record::SimRecording>(options.record_path, session, limits);
   }
 
   SimResult result;
@@ -66,16 +85,17 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
         prisms[i] = hal::PrismView{views[i], Vec2(0.0, 0.0), kPersonHeightM};
       }
       camera->perceive(world.time(), world.robot().pose, prisms);
-      std::size_t m = 0;
+      seen = 0;
       if (const hal::ObstacleFrame* f = camera->delivered(world.time())) {
-        for (; m < f->count; ++m) {
-          seen_views[m] = PolygonView(f->obstacles[m].vertices.data(), f->obstacles[m].n);
-          seen_velocities[m] = f->obstacles[m].velocity;
-          seen_turn_rates[m] = f->obstacles[m].turn_rate;
+        for (; seen < f->count; ++seen) {
+          seen_views[seen] = PolygonView(f->obstacles[seen].vertices.data(), f->obstacles[seen].n);
+          seen_velocities[seen] = f->obstacles[seen].velocity;
+          seen_turn_rates[seen] = f->obstacles[seen].turn_rate;
         }
       }
-      obstacles.set(std::span<const PolygonView>(seen_views.data(), m), std::span<const Vec2>(seen_velocities.data(), m),
-                    std::span<const double>(seen_turn_rates.data(), m));
+      obstacles.set(std::span<const PolygonView>(seen_views.data(), seen),
+                    std::span<const Vec2>(seen_velocities.data(), seen),
+                    std::span<const double>(seen_turn_rates.data(), seen));
     } else {
       obstacles.set(views, velocities);
     }
@@ -83,8 +103,25 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     CycleInputs in;
     in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
     in.obstacles = &obstacles;
-    const PlannerBudget budget = options.budget.make();
+    PlannerBudget budget = options.budget.make();
+    if (recording) {
+      recording->agent(0).obstacles(camera ? record::ObstacleInputs{std::span<const PolygonView>(seen_views.data(), seen),
+                                                                    std::span<const Vec2>(seen_velocities.data(), seen),
+                                                                    std::span<const double>(seen_turn_rates.data(), seen)}
+                                           : record::ObstacleInputs{views, velocities, {}});
+      budget = recording->agent(0).before(cycle, options.budget, &steadyClockNs);
+    }
     const CycleOutput out = cycle.step(in, budget);
+    double v_cmd = out.v_cmd;
+    if (camera) {
+      v_cmd = camera->limitSpeed(world.time(), rs.pose, out.v_cmd, out.w_cmd);
+      camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, cycle.lastPath(), period);
+    }
+    if (recording) {
+      // The command to the base is the camera's limited one; the cycle's own is beside it.
+      recording->agent(0).after(cycle, record::simNanos(world.time()), in.robot, record::StepKind::kStepped, 0, &out,
+                                {v_cmd, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
+    }
     result.trace.push_back(rs.pose);
     if (out.planned) {
       ++result.calls;
@@ -103,11 +140,6 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
         ++result.frames_written;
       }
     }
-    double v_cmd = out.v_cmd;
-    if (camera) {
-      v_cmd = camera->limitSpeed(world.time(), rs.pose, out.v_cmd, out.w_cmd);
-      camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, cycle.lastPath(), period);
-    }
     if (options.on_cycle) options.on_cycle(world, out, k);
     result.final_state = toString(out.state);
     if (out.state == CycleState::kReached) {
@@ -118,6 +150,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     }
     world.step(period, v_cmd, out.w_cmd);
   }
+  if (recording) recording->close();
   result.duration_s = world.time();
   if (!result.reached_goal) result.time_to_goal_s = world.time();
   result.collisions = world.collisionEpisodes();
@@ -139,6 +172,19 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
 
 void writeFrame(const std::filesystem::path& file, const World& world, ControlCycle& cycle, const CycleOutput& out,
                 const DynamicObstacleSet& obstacles) {
+  FrameScene scene;
+  scene.map = &world.map();
+  scene.body = world.footprint();
+  scene.robot = world.robot().pose;
+  char caption[160];
+  std::snprintf(caption, sizeof caption, "t = %.2f s   v = %.2f m/s   pops %u   depth %d   %s", world.time(),
+                world.robot().v, out.plan.stats.pops, out.plan.depth, toString(out.plan.outcome));
+  scene.caption.push_back(caption);
+  drawCycleFrame(file, scene, cycle, out, obstacles);
+}
+
+void drawCycleFrame(const std::filesystem::path& file, const FrameScene& scene, ControlCycle& cycle,
+                    const CycleOutput& out, const DynamicObstacleSet& obstacles) {
   const LocalMap& local = cycle.localMap();
   // Frame the local box with a margin: the paper's Fig. 1 view.
   Box view{local.boxCorners()[0], local.boxCorners()[0]};
@@ -151,11 +197,12 @@ void writeFrame(const std::filesystem::path& file, const World& world, ControlCy
   SvgCanvasOptions opt;
   opt.px_per_m = 60.0;
   opt.side_panel_px = 170.0;
+  opt.margin_px = std::max(opt.margin_px, 14.0 * static_cast<double>(scene.caption.size()) + 6.0);
   SvgCanvas canvas(view, opt);
   canvas.beginGroup(SvgStyle{}, true);
   // Inflated obstacles M' (light) and real ones (dark).
   canvas.polygons(cycle.pathPlanner().inflatedObstacles(), svgFill("#f4c7a1", 0.6));
-  canvas.polygons(world.map().obstacles, svgFill("#4a4a4a"));
+  canvas.polygons(scene.map->obstacles, svgFill("#4a4a4a"));
   // Occupied cells of the collision grid C and the costmap C' (blurred halo).
   std::vector<Box> cells;
   const int w = local.width(), h = local.height();
@@ -200,19 +247,23 @@ void writeFrame(const std::filesystem::path& file, const World& world, ControlCy
   std::vector<Vec2> traj;
   for (const UnicycleState& s : out.plan.trajectory) traj.push_back(s.position());
   canvas.polyline(traj, svgStroke("#c0392b", 3.0));
-  Polygon body = world.footprint();
-  canvas.polygon(body, svgFill("#2c3e50", 0.85));
-  canvas.arrow(world.robot().pose, 0.5, svgStroke("#ffffff", 2.0));
+  // The first action (to the plan's first state), in its braking-safety tier's colour.
+  static const char* const kTierColours[] = {"#e74c3c", "#f39c12", "#27ae60"};
+  const bool tiered = scene.first_action_tier >= 0 && scene.first_action_tier <= 2 && traj.size() >= 2;
+  if (tiered) {
+    canvas.polyline(std::span<const Vec2>(traj.data(), 2), svgStroke(kTierColours[scene.first_action_tier], 6.0));
+  }
+  canvas.polygon(scene.body, svgFill("#2c3e50", 0.85));
+  canvas.arrow(scene.robot, 0.5, svgStroke("#ffffff", 2.0));
   const IntermediateGoal& g = local.intermediateGoal();
   canvas.marker(g.pose.position(), 6.0, svgFill("#f1c40f"));
   canvas.arrow(g.pose, 0.6, svgStroke("#b7950b", 2.0));
   canvas.endGroup();
-  char caption[160];
-  std::snprintf(caption, sizeof caption, "t = %.2f s   v = %.2f m/s   pops %u   depth %d   %s", world.time(),
-                world.robot().v, out.plan.stats.pops, out.plan.depth, toString(out.plan.outcome));
-  canvas.textPx(Vec2(opt.margin_px, 14.0), caption, 12.0);
+  for (std::size_t i = 0; i < scene.caption.size(); ++i) {
+    canvas.textPx(Vec2(opt.margin_px, 14.0 + 14.0 * static_cast<double>(i)), scene.caption[i], i == 0 ? 12.0 : 11.0);
+  }
   canvas.scaleBar();
-  const std::vector<LegendEntry> legend{
+  std::vector<LegendEntry> legend{
       {"obstacle", svgFill("#4a4a4a"), LegendSymbol::kArea},
       {"inflated (M')", svgFill("#f4c7a1", 0.6), LegendSymbol::kArea},
       {"collision grid C", svgFill("#d9822b", 0.9), LegendSymbol::kArea},
@@ -224,6 +275,11 @@ void writeFrame(const std::filesystem::path& file, const World& world, ControlCy
       {"mover, D(t)", svgFill("#8e44ad", 0.8), LegendSymbol::kArea},
       {"G~", svgFill("#f1c40f"), LegendSymbol::kMarker},
   };
+  if (tiered) {
+    static const char* const kTierNames[] = {"1st action: no tier", "1st action: braking", "1st action: passive"};
+    legend.push_back({kTierNames[scene.first_action_tier], svgStroke(kTierColours[scene.first_action_tier], 6.0),
+                      LegendSymbol::kLine});
+  }
   canvas.legend(legend);
   canvas.save(file);
 }

@@ -8,6 +8,7 @@
 #include "control/control_cycle.hpp"
 #include "experiment/obstacle_source.hpp"
 #include "planner/budget.hpp"
+#include "record/recording.hpp"
 #include "world/world.hpp"
 
 #include <cstdint>
@@ -32,6 +33,10 @@ struct SimOptions {
   int svg_every = 15;             // cycles between frames
   // Called after each cycle (progress, tests); may be empty.
   std::function<void(const World&, const CycleOutput&, int cycle)> on_cycle;
+  // Every cycle recorded into this MCAP file (staa-sim --record; empty: off). The runner
+  // completes the session (control configuration, robot, map, agents).
+  std::filesystem::path record_path;
+  record::Session record_session;
 };
 
 struct Distribution {
@@ -71,5 +76,20 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options);
 // obstacles, search tree, chosen trajectory, G~, the movers and their predictions).
 void writeFrame(const std::filesystem::path& file, const World& world, ControlCycle& cycle, const CycleOutput& out,
                 const DynamicObstacleSet& obstacles);
+
+// What a frame shows besides the cycle's own state: the map, the robot (its footprint placed
+// at its pose) and the caption's lines (the first one is the title).
+struct FrameScene {
+  const PolygonMap* map = nullptr;
+  Polygon body;  // the footprint in the world
+  Pose2 robot;
+  std::vector<std::string> caption;
+  // The first action of the plan drawn in the colour of its braking-safety tier (2 passive,
+  // 1 braking hypothesis, 0 none passed), with its legend entry; -1: not drawn.
+  int first_action_tier = -1;
+};
+// The frame of writeFrame, for any source of cycles (staa-replay draws recorded ones).
+void drawCycleFrame(const std::filesystem::path& file, const FrameScene& scene, ControlCycle& cycle,
+                    const CycleOutput& out, const DynamicObstacleSet& obstacles);
 
 }  // namespace staa

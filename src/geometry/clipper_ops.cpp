@@ -95,6 +95,48 @@ std::vector<PolygonWithHoles> unitePolygons(const std::vector<Polygon>& polygons
   return solve(clipper, cl::ctUnion, cl::pftNonZero);
 }
 
+double unionArea(const std::vector<Polygon>& polygons) {
+  // Groups of polygons linked by overlapping boxes (closed boxes: touching counts), by a sweep
+  // over x with union-find.
+  std::vector<std::size_t> order, parent(polygons.size());
+  std::vector<Box> boxes(polygons.size());
+  for (std::size_t i = 0; i < polygons.size(); ++i) {
+    parent[i] = i;
+    if (polygons[i].size() < 3) continue;
+    boxes[i] = boundingBox(polygons[i]);
+    order.push_back(i);
+  }
+  auto find = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return boxes[a].min.x() < boxes[b].min.x() || (boxes[a].min.x() == boxes[b].min.x() && a < b);
+  });
+  std::vector<std::size_t> active;
+  for (const std::size_t i : order) {
+    std::erase_if(active, [&](std::size_t j) { return boxes[j].max.x() < boxes[i].min.x(); });
+    for (const std::size_t j : active) {
+      if (boxes[j].min.y() <= boxes[i].max.y() && boxes[i].min.y() <= boxes[j].max.y()) parent[find(i)] = find(j);
+    }
+    active.push_back(i);
+  }
+  std::vector<std::vector<Polygon>> groups(polygons.size());
+  for (const std::size_t i : order) groups[find(i)].push_back(polygons[i]);
+  double area = 0.0;
+  for (const std::vector<Polygon>& group : groups) {
+    if (group.size() == 1) {
+      area += std::abs(signedArea(group.front()));
+      continue;
+    }
+    for (const PolygonWithHoles& region : unitePolygons(group)) {
+      area += std::abs(signedArea(region.outer));
+      for (const Polygon& hole : region.holes) area -= std::abs(signedArea(hole));
+    }
+  }
+  return area;
+}
+
 std::vector<PolygonWithHoles> inflatePolygons(const std::vector<Polygon>& polygons, double radius,
                                               double arc_tolerance) {
   cl::Paths paths = toPaths(polygons);

@@ -17,6 +17,12 @@ struct PolygonWithHoles {
 // Union of arbitrary simple polygons (either winding, may overlap), nonzero fill.
 std::vector<PolygonWithHoles> unitePolygons(const std::vector<Polygon>& polygons);
 
+// The area the polygons cover, overlaps counted once (unitePolygons' regions, outer areas less
+// holes). A polygon whose box overlaps no other polygon's box counts its own area, without
+// Clipper: Clipper 6's union grows with the square of a polygon's vertex count (a 20,000-
+// vertex star took 0.2 s, 200,000 vertices 46 s); only groups of overlapping boxes are united.
+double unionArea(const std::vector<Polygon>& polygons);
+
 // The union of the polygons grown by `radius` metres (round corners whose chords stay within
 // `arc_tolerance` of the true arc). A negative radius shrinks. Outer boundaries only grow, so
 // a room whose door is narrower than 2 * radius becomes a hole.

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
+#include <set>
 #include <span>
 #include <vector>
 
@@ -152,6 +154,12 @@ class EdgeGrid {
     edges_.resize(offsets_.back());
     std::vector<std::size_t> cursor(offsets_.begin(), offsets_.end() - 1);
     forEachEdgeCell([&](std::size_t e, std::size_t c) { edges_[cursor[c]++] = static_cast<std::uint32_t>(e); });
+    // The pairs a scan of the cells tests: edges crowded into few cells (a fine outline in a
+    // large box) make it quadratic although each edge covers few cells.
+    for (std::size_t c = 0; c + 1 < offsets_.size(); ++c) {
+      const double k = static_cast<double>(offsets_[c + 1] - offsets_[c]);
+      pairs_ += k * k;
+    }
   }
 
   // Calls visit(c) for every cell index covered by edge e's box.
@@ -170,6 +178,9 @@ class EdgeGrid {
   // quadratic scan costs time, and the caller takes that scan.
   static constexpr double kMaxEntriesPerEdge = 64.0;
   bool useful() const { return entries_ <= kMaxEntriesPerEdge * static_cast<double>(poly_.size()); }
+  // Built, and its cells hold at most kMaxPairsPerEdge pairs per edge.
+  static constexpr double kMaxPairsPerEdge = 256.0;
+  bool fast() const { return useful() && pairs_ <= kMaxPairsPerEdge * static_cast<double>(poly_.size()); }
   std::span<const std::uint32_t> cellEdges(std::size_t c) const {
     return {edges_.data() + offsets_[c], offsets_[c + 1] - offsets_[c]};
   }
@@ -203,6 +214,7 @@ class EdgeGrid {
   int cols_ = 1;
   int rows_ = 1;
   double entries_ = 0.0;
+  double pairs_ = 0.0;
   std::vector<std::size_t> offsets_;
   std::vector<std::uint32_t> edges_;
 };
@@ -220,13 +232,100 @@ std::optional<EdgePair> findSelfIntersectionQuadratic(PolygonView poly) {
   return std::nullopt;
 }
 
+namespace {
+
+// Shamos and Hoey's sweep: is the polygon simple, in O(n log n) for any shape? Vertices in
+// (x, y) order; the status holds the edges the sweep line crosses, ordered by where they
+// cross it; an edge is tested against its neighbours whenever it gains new ones. With all
+// vertices distinct, the only points two edges may share are the vertices adjacent edges
+// share, and the first point where edges offend is found before the status order breaks.
+// Returns an offending pair (the one met first, not necessarily the smallest), or nothing.
+std::optional<EdgePair> sweepSelfIntersection(PolygonView poly) {
+  const std::size_t n = poly.size();
+  auto less = [&](std::uint32_t a, std::uint32_t b) {
+    const Vec2& p = poly[a];
+    const Vec2& q = poly[b];
+    return p.x() < q.x() || (p.x() == q.x() && (p.y() < q.y() || (p.y() == q.y() && a < b)));
+  };
+  std::vector<std::uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), less);
+  auto ordered = [](std::size_t a, std::size_t b) { return EdgePair{std::min(a, b), std::max(a, b)}; };
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const std::size_t a = order[k], b = order[k + 1];
+    if (poly[a] != poly[b]) continue;
+    // A vertex repeated: a zero-length edge, or two edges that start at the same point.
+    if ((a + 1) % n == b) return EdgePair{a, a};
+    if ((b + 1) % n == a) return EdgePair{b, b};
+    return ordered(a, b);
+  }
+  // Edge e runs from vertex e to vertex e + 1; its left end is the one first in the order.
+  std::vector<std::uint32_t> rank(n);
+  for (std::size_t k = 0; k < n; ++k) rank[order[k]] = static_cast<std::uint32_t>(k);
+  auto leftEnd = [&](std::size_t e) { return rank[e] < rank[(e + 1) % n] ? e : (e + 1) % n; };
+  auto rightEnd = [&](std::size_t e) { return rank[e] < rank[(e + 1) % n] ? (e + 1) % n : e; };
+
+  std::optional<EdgePair> found;
+  std::size_t inserting = n;  // the edge being inserted: every comparison is with it
+  // Is edge s (being inserted at its left end p) below edge t, on the sweep line through p?
+  auto below = [&](std::size_t s, std::size_t t) {
+    const Vec2& p = poly[leftEnd(s)];
+    int o = 0;
+    if (leftEnd(t) == leftEnd(s)) {
+      o = orientSign(p, poly[rightEnd(t)], poly[rightEnd(s)]);  // both start at p: by direction
+    } else {
+      o = orientSign(poly[leftEnd(t)], poly[rightEnd(t)], p);   // p's side of t
+    }
+    if (o == 0 && !found) found = ordered(s, t);  // p on t, or both leave p along one line
+    return o < 0;
+  };
+  auto cmp = [&](std::uint32_t a, std::uint32_t b) {
+    if (a == b) return false;
+    if (a == inserting) return below(a, b);
+    if (b == inserting) return !below(b, a);
+    return a < b;  // never asked: only the new edge is compared
+  };
+  std::set<std::uint32_t, decltype(cmp)> status(cmp);
+  std::vector<std::set<std::uint32_t, decltype(cmp)>::iterator> where(n, status.end());
+  auto check = [&](std::size_t a, std::size_t b) {
+    if (!found && edgesOffend(poly, std::min(a, b), std::max(a, b))) found = ordered(a, b);
+  };
+  for (const std::uint32_t v : order) {
+    const std::size_t edges[2] = {(v + n - 1) % n, v};
+    for (const std::size_t e : edges) {  // edges ending here leave the status first
+      if (rightEnd(e) != v) continue;
+      auto it = where[e];
+      const bool has_below = it != status.begin();
+      const auto above = std::next(it);
+      if (has_below && above != status.end()) check(*std::prev(it), *above);
+      status.erase(it);
+      where[e] = status.end();
+    }
+    for (const std::size_t e : edges) {
+      if (leftEnd(e) != v) continue;
+      inserting = e;
+      const auto it = status.insert(static_cast<std::uint32_t>(e)).first;
+      inserting = n;
+      where[e] = it;
+      if (it != status.begin()) check(e, *std::prev(it));
+      if (std::next(it) != status.end()) check(e, *std::next(it));
+    }
+    if (found) return found;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 std::optional<EdgePair> findSelfIntersection(PolygonView poly) {
   const std::size_t n = poly.size();
   if (n < 3) return std::nullopt;
   // Small polygons: the grid would cost more than it saves.
   if (n <= 32) return findSelfIntersectionQuadratic(poly);
   const EdgeGrid grid(poly);
-  if (!grid.useful()) return findSelfIntersectionQuadratic(poly);
+  // Without a grid that pays, the sweep decides in O(n log n) (a star's long spikes, a fine
+  // outline crowded into a few cells): the pair it names offends, but may not be the first.
+  if (!grid.fast()) return sweepSelfIntersection(poly);
   // The same pairs in the same order as the quadratic scan, less those whose boxes share no
   // cell (they cannot touch): the first offending pair is the same one.
   for (std::size_t i = 0; i < n; ++i) {
@@ -240,6 +339,10 @@ std::optional<EdgePair> findSelfIntersection(PolygonView poly) {
     if (first < n) return EdgePair{i, first};
   }
   return std::nullopt;
+}
+
+std::optional<EdgePair> findSelfIntersectionSweep(PolygonView poly) {
+  return poly.size() < 3 ? std::nullopt : sweepSelfIntersection(poly);
 }
 
 }  // namespace staa

@@ -40,9 +40,10 @@ double distanceToEdges(const Vec2& p, PolygonView poly);
 // vertex. Returns the first offending edge pair (i < j, smallest i, then smallest j; {i, i}
 // for a zero-length edge i), or nullopt when simple. Load-time validation, not for the cycle:
 // it allocates an edge grid, and tests only edge pairs whose boxes share a grid cell (about
-// linear in n for real outlines). When the edges' boxes overlap so much that the grid would
-// list more than 64 entries per edge (a star's spikes), it scans all pairs instead: O(n^2)
-// time, O(n) memory.
+// linear in n for real outlines). When the grid would not pay (more than 64 entries or 256
+// cell pairs per edge: a star's spikes, a fine outline crowded into few cells of its box), a
+// sweep (Shamos-Hoey) decides in O(n log n) instead; a pair it reports offends but need not
+// be the first.
 struct EdgePair {
   std::size_t first;
   std::size_t second;
@@ -50,5 +51,7 @@ struct EdgePair {
 std::optional<EdgePair> findSelfIntersection(PolygonView poly);
 // The same answer by testing every pair, O(n^2): the tests' oracle.
 std::optional<EdgePair> findSelfIntersectionQuadratic(PolygonView poly);
+// The sweep alone, for any polygon: whether it is simple, and an offending pair if not.
+std::optional<EdgePair> findSelfIntersectionSweep(PolygonView poly);
 
 }  // namespace staa

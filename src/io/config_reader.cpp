@@ -13,6 +13,7 @@
 #include <optional>
 #include <sstream>
 #include <system_error>
+#include <unordered_map>
 #include <utility>
 
 namespace staa::io {
@@ -22,15 +23,12 @@ namespace fs = std::filesystem;
 struct Origin {
   std::string source;
   fs::path directory;
+  std::shared_ptr<const YamlTree> tree;  // the nodes every value of the document points into
 };
 
 namespace {
 
-int lineOf(const YAML::Node& node) {
-  if (!node.IsDefined()) return 0;
-  const YAML::Mark mark = node.Mark();
-  return mark.line >= 0 ? mark.line + 1 : 0;
-}
+int lineOf(const YamlNode& node) { return node.line(); }
 
 std::string joined(std::initializer_list<std::string_view> keys) {
   std::string out;
@@ -43,7 +41,7 @@ std::string joined(std::initializer_list<std::string_view> keys) {
 
 // A decimal integer, a leading + allowed.
 template <class T>
-std::optional<T> parseInteger(const YAML::Node& node) {
+std::optional<T> parseInteger(const YamlNode& node) {
   if (!node.IsScalar()) return std::nullopt;
   std::string_view s = node.Scalar();
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
@@ -59,11 +57,11 @@ std::string pointText(const Vec2& p) { return yaml_support::formatPoint(p); }
 
 // ---- ConfigValue ----
 
-ConfigValue::ConfigValue(std::shared_ptr<const Origin> origin, bool given, YAML::Node node, std::string path, int line,
+ConfigValue::ConfigValue(std::shared_ptr<const Origin> origin, bool given, YamlNode node, std::string path, int line,
                          int key_line)
     : origin_(std::move(origin)), given_(given), node_(std::move(node)), path_(std::move(path)), line_(line), key_line_(key_line) {}
 
-ConfigValue ConfigValue::absent(std::string path) const { return ConfigValue(origin_, false, YAML::Node(), std::move(path), line_, line_); }
+ConfigValue ConfigValue::absent(std::string path) const { return ConfigValue(origin_, false, YamlNode(), std::move(path), line_, line_); }
 
 std::string ConfigValue::childPath(std::string_view key) const {
   std::string out = path_;
@@ -75,7 +73,7 @@ std::string ConfigValue::childPath(std::string_view key) const {
 const std::string& ConfigValue::source() const { return origin_->source; }
 
 std::string ConfigValue::text() const {
-  if (given_ && node_.IsScalar()) return node_.Scalar();
+  if (given_ && node_.IsScalar()) return std::string(node_.Scalar());
   return described();
 }
 
@@ -106,37 +104,39 @@ void ConfigValue::failRule(const std::string& rule) const { fail("must be " + ru
 
 const ConfigValue& ConfigValue::anyMapping() const {
   if (!given_ || !node_.IsMap()) fail("expected a mapping, got " + described());
-  std::vector<std::pair<std::string, int>> seen;
-  for (const auto& kv : node_) {
-    if (!kv.first.IsScalar()) continue;
-    const std::string& key = kv.first.Scalar();
-    for (const auto& [k, first_line] : seen) {
-      if (k == key) {
-        ConfigValue at = child(kv.first, kv.second, key);
-        at.failAtKey("given twice (first on line " + std::to_string(first_line) + ")");
-      }
+  // A hash of the keys seen: linear in the mapping's size (a pairwise scan would make a
+  // mapping of 100,000 keys cost 5 billion comparisons).
+  std::unordered_map<std::string_view, int> seen;
+  seen.reserve(node_.size());
+  for (std::size_t i = 0; i < node_.size(); ++i) {
+    const YamlNode key = node_.key(i);
+    if (!key.IsScalar()) continue;
+    const auto [it, fresh] = seen.emplace(key.Scalar(), lineOf(key));
+    if (!fresh) {
+      ConfigValue at = child(key, node_.value(i), key.Scalar());
+      at.failAtKey("given twice (first on line " + std::to_string(it->second) + ")");
     }
-    seen.emplace_back(key, lineOf(kv.first));
   }
   return *this;
 }
 
 const ConfigValue& ConfigValue::mapping(std::initializer_list<std::string_view> keys) const {
   if (!given_ || !node_.IsMap()) fail("expected a mapping {" + joined(keys) + "}, got " + described());
-  for (const auto& kv : node_) {
-    if (!kv.first.IsScalar()) {
+  for (std::size_t i = 0; i < node_.size(); ++i) {
+    const YamlNode key = node_.key(i);
+    if (!key.IsScalar()) {
       ConfigValue at = *this;
-      at.line_ = lineOf(kv.first);
-      at.fail("a key that is not a name, " + yaml_support::describe(kv.first) + " (expected " + joined(keys) + ")");
+      at.line_ = lineOf(key);
+      at.fail("a key that is not a name, " + yaml_support::describe(key) + " (expected " + joined(keys) + ")");
     }
-    if (std::find(keys.begin(), keys.end(), kv.first.Scalar()) == keys.end()) {
-      child(kv.first, kv.second, kv.first.Scalar()).failAtKey("unknown key (expected " + joined(keys) + ")");
+    if (std::find(keys.begin(), keys.end(), key.Scalar()) == keys.end()) {
+      child(key, node_.value(i), key.Scalar()).failAtKey("unknown key (expected " + joined(keys) + ")");
     }
   }
   return anyMapping();
 }
 
-ConfigValue ConfigValue::child(const YAML::Node& key, const YAML::Node& value, std::string_view name) const {
+ConfigValue ConfigValue::child(const YamlNode& key, const YamlNode& value, std::string_view name) const {
   const int key_line = lineOf(key);
   // A null value (`key:` and nothing) has yaml-cpp's mark of whatever follows it.
   const int line = value.IsNull() ? 0 : lineOf(value);
@@ -145,8 +145,9 @@ ConfigValue ConfigValue::child(const YAML::Node& key, const YAML::Node& value, s
 
 ConfigValue ConfigValue::get(std::string_view key) const {
   if (given_ && node_.IsMap()) {
-    for (const auto& kv : node_) {
-      if (kv.first.IsScalar() && kv.first.Scalar() == key) return child(kv.first, kv.second, key);
+    for (std::size_t i = 0; i < node_.size(); ++i) {
+      const YamlNode k = node_.key(i);
+      if (k.IsScalar() && k.Scalar() == key) return child(k, node_.value(i), key);
     }
   }
   return absent(childPath(key));
@@ -172,7 +173,7 @@ const ConfigValue& ConfigValue::list(std::string_view what, std::size_t min_item
 ConfigValue ConfigValue::operator[](std::size_t i) const {
   std::string path = path_ + "[" + std::to_string(i) + "]";
   if (!given_ || !node_.IsSequence() || i >= node_.size()) return absent(std::move(path));
-  const YAML::Node item = node_[i];
+  const YamlNode item = node_[i];
   const int line = lineOf(item);
   return ConfigValue(origin_, true, item, std::move(path), line > 0 ? line : line_, line > 0 ? line : line_);
 }
@@ -212,13 +213,13 @@ std::uint64_t ConfigValue::unsignedInteger() const {
 
 bool ConfigValue::boolean() const {
   bool on = false;
-  if (!given_ || !node_.IsScalar() || !YAML::convert<bool>::decode(node_, on)) fail("expected true or false, got " + described());
+  if (!given_ || !node_.IsScalar() || !decodeYamlBool(node_.Scalar(), on)) fail("expected true or false, got " + described());
   return on;
 }
 
 std::string ConfigValue::string(std::string_view what) const {
   if (!given_ || !node_.IsScalar()) fail("expected " + std::string(what) + ", got " + described());
-  return node_.Scalar();
+  return std::string(node_.Scalar());
 }
 
 std::string ConfigValue::nonEmptyString(std::string_view what) const {
@@ -256,6 +257,22 @@ Pose2 ConfigValue::pose() const {
   return {v[0], v[1], v[2]};
 }
 
+std::vector<Vec2> ConfigValue::points(std::string_view what, std::size_t max_items, std::string_view bound_note) const {
+  list(what);
+  if (size() > max_items) {
+    fail("has " + std::to_string(size()) + " points, beyond the bound of " + std::to_string(max_items) + std::string(bound_note));
+  }
+  std::vector<Vec2> out;
+  out.reserve(size());
+  for (std::size_t k = 0; k < size(); ++k) {
+    const YamlNode item = node_[k];
+    const std::optional<double> x = item.IsSequence() && item.size() == 2 ? readFiniteNumber(item[0]) : std::nullopt;
+    const std::optional<double> y = x ? readFiniteNumber(item[1]) : std::nullopt;
+    out.push_back(y ? Vec2(*x, *y) : (*this)[k].point());
+  }
+  return out;
+}
+
 Polygon ConfigValue::polygon() const {
   list("a list of [x, y] vertices");
   Polygon poly;
@@ -272,15 +289,13 @@ ConfigDocument ConfigDocument::parse(const std::string& text, const std::string&
 }
 
 ConfigDocument ConfigDocument::parse(const std::string& text, const std::string& source, const fs::path& directory) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    std::string msg = source;
-    if (e.mark.line >= 0) msg += ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1);
-    throw ConfigError(msg + ": not valid YAML: " + e.msg);
+  if (text.size() > kMaxYamlFileBytes) {
+    throw ConfigError(source + ": " + std::to_string(text.size()) + " bytes, beyond the bound of " +
+                      std::to_string(kMaxYamlFileBytes) + " bytes for a YAML file");
   }
-  auto origin = std::make_shared<const Origin>(Origin{source, directory});
+  std::shared_ptr<const YamlTree> tree = YamlTree::parse(text, source);
+  const YamlNode root = tree->root();
+  auto origin = std::make_shared<const Origin>(Origin{source, directory, std::move(tree)});
   // The document as a whole has no line: a key missing from it is missing from the file.
   return ConfigDocument(ConfigValue(std::move(origin), true, root, "", 0, 0));
 }
@@ -304,12 +319,22 @@ std::string ConfigDocument::readFile(const fs::path& file, std::string_view what
   const auto status = fs::status(file, ec);
   if (!fs::exists(status)) throw ConfigError(name + ": " + std::string(what) + " not found");
   if (fs::is_directory(status)) throw ConfigError(name + ": is a directory, not a " + std::string(what));
+  // Refused before reading: a file beyond the bound is not read into memory at all.
+  if (const auto size = fs::file_size(file, ec); !ec && size > kMaxYamlFileBytes) {
+    throw ConfigError(name + ": " + std::to_string(size) + " bytes, beyond the bound of " + std::to_string(kMaxYamlFileBytes) +
+                      " bytes for a " + std::string(what));
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(name + ": cannot open " + std::string(what) + ": " + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw ConfigError(name + ": read error");
   return std::move(text).str();
+}
+
+std::optional<double> readFiniteNumber(const YamlNode& node) {
+  const std::optional<double> v = yaml_support::readNumber(node);
+  return v && std::isfinite(*v) ? v : std::nullopt;
 }
 
 // ---- polygons ----

@@ -13,14 +13,14 @@
 
 #include "geometry/types.hpp"
 #include "io/config_rules.hpp"
-
-#include <yaml-cpp/yaml.h>
+#include "io/yaml_tree.hpp"
 
 #include <array>
 #include <cstdint>
 #include <filesystem>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -43,7 +43,7 @@ class ConfigValue {
   int line() const { return line_; }
   // The line of the key that holds this value (a section's own line), else line().
   int keyLine() const { return key_line_; }
-  const YAML::Node& node() const { return node_; }
+  const YamlNode& node() const { return node_; }
   const std::string& source() const;
   // The value as written (a scalar verbatim, else described), for "got ..." of a range.
   std::string text() const;
@@ -109,14 +109,18 @@ class ConfigValue {
   std::array<double, N> numbers(std::string_view shape) const;
   Vec2 point() const;   // [x, y]
   Pose2 pose() const;   // [x, y, theta]
+  // A list of at most `max_items` [x, y] points ("expected WHAT, got ..."; "has N points,
+  // beyond the bound of MAX NOTE"). Read without a ConfigValue per point (a 200,000-vertex
+  // polygon), the same messages as point() where one is not a point.
+  std::vector<Vec2> points(std::string_view what, std::size_t max_items, std::string_view bound_note) const;
   // A list of [x, y] vertices: a simple polygon (polygonProblem()), either winding.
   Polygon polygon() const;
 
  private:
   friend class ConfigDocument;
-  ConfigValue(std::shared_ptr<const Origin> origin, bool given, YAML::Node node, std::string path, int line, int key_line);
+  ConfigValue(std::shared_ptr<const Origin> origin, bool given, YamlNode node, std::string path, int line, int key_line);
   // The entry `key: value` of this mapping, as a value named `name`.
-  ConfigValue child(const YAML::Node& key, const YAML::Node& value, std::string_view name) const;
+  ConfigValue child(const YamlNode& key, const YamlNode& value, std::string_view name) const;
   // A value not in the file, at `path`: its line is this value's.
   ConfigValue absent(std::string path) const;
   std::string childPath(std::string_view key) const;
@@ -124,7 +128,7 @@ class ConfigValue {
 
   std::shared_ptr<const Origin> origin_;
   bool given_ = false;
-  YAML::Node node_;  // read only when given_
+  YamlNode node_;  // read only when given_
   std::string path_;
   int line_ = 0;
   int key_line_ = 0;
@@ -152,18 +156,15 @@ class ConfigDocument {
 };
 
 // Runs `read` (a parser written with ConfigValue) and rethrows a ConfigError as the
-// format's own error type; a yaml-cpp exception (never expected: every read checks the
-// node's kind first) becomes one too, naming `source`.
+// format's own error type.
 template <class Error, class Read>
-auto readAs(const std::string& source, Read&& read) -> decltype(read()) {
+auto readAs(const std::string& /*source*/, Read&& read) -> decltype(read()) {
   try {
     return read();
   } catch (const Error&) {
     throw;
   } catch (const ConfigError& e) {
     throw Error(e.what());
-  } catch (const YAML::Exception& e) {
-    throw Error(source + ": unreadable YAML: " + e.what());
   }
 }
 
@@ -172,13 +173,16 @@ auto readAs(const std::string& source, Read&& read) -> decltype(read()) {
 // Shared by the readers (with the line) and by checks of polygons built in memory.
 std::string polygonProblem(PolygonView polygon);
 
+// A finite number, or nothing (a ConfigValue's number() then says why).
+std::optional<double> readFiniteNumber(const YamlNode& node);
+
 // ---- templates ----
 
 template <class E>
 E ConfigValue::choice(std::span<const Choice<E>> choices) const {
   std::vector<std::string_view> names, meanings;
   for (const Choice<E>& c : choices) {
-    if (node_.IsScalar() && node_.Scalar() == c.name) return c.value;
+    if (node_.IsScalar() && node_.Scalar() == std::string_view(c.name)) return c.value;
     names.push_back(c.name);
     meanings.push_back(c.meaning);
   }
@@ -189,7 +193,11 @@ template <std::size_t N>
 std::array<double, N> ConfigValue::numbers(std::string_view shape) const {
   if (!node_.IsSequence() || node_.size() != N) fail("expected " + std::string(shape) + ", got " + described());
   std::array<double, N> out{};
-  for (std::size_t k = 0; k < N; ++k) out[k] = (*this)[k].number();
+  for (std::size_t k = 0; k < N; ++k) {
+    // Straight from the node; a ConfigValue (its key path) only to name a bad item.
+    const std::optional<double> v = readFiniteNumber(node_[k]);
+    out[k] = v ? *v : (*this)[k].number();
+  }
   return out;
 }
 

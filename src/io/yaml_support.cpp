@@ -9,14 +9,14 @@
 
 namespace staa::yaml_support {
 
-std::string describe(const YAML::Node& node) {
+std::string describe(const io::YamlNode& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
   if (node.IsScalar()) {
     // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "'" + s + "'".
-    const std::string& scalar = node.Scalar();
+    const std::string_view scalar = node.Scalar();
     std::string out = "'";
     if (scalar.size() > 40) {
-      out.append(scalar, 0, 37);
+      out.append(scalar.substr(0, 37));
       out += "...";
     } else {
       out += scalar;
@@ -39,7 +39,7 @@ std::string formatPoint(const Vec2& p) {
   return out;
 }
 
-std::optional<double> readNumber(const YAML::Node& node) {
+std::optional<double> readNumber(const io::YamlNode& node) {
   if (!node.IsScalar()) return std::nullopt;
   std::string_view s = node.Scalar();
   for (std::string_view nan : {".nan", ".NaN", ".NAN"}) {

@@ -99,19 +99,23 @@ PolygonMap readDocument(const io::ConfigValue& root) {
   }
   if (const io::ConfigValue obstacles = root.get("obstacles"); obstacles.present()) {
     obstacles.list("a list of polygons");
+    if (obstacles.size() > kMaxMapPolygons) {
+      obstacles.fail("has " + std::to_string(obstacles.size()) + " polygons, beyond the bound of " +
+                     std::to_string(kMaxMapPolygons) + " per map");
+    }
     map.obstacles.reserve(obstacles.size());
     for (std::size_t i = 0; i < obstacles.size(); ++i) {
       const io::ConfigValue poly = obstacles[i];
-      poly.list("a list of [x, y] vertices");
-      Polygon p;
-      p.reserve(poly.size());
-      for (std::size_t k = 0; k < poly.size(); ++k) p.push_back(poly[k].point());
+      Polygon p = poly.points("a list of [x, y] vertices", kMaxPolygonVertices, " vertices per polygon");
       if (std::string e = polygonProblem(p); !e.empty()) poly.fail(e);
       map.obstacles.push_back(std::move(p));
     }
   }
   if (const io::ConfigValue goals = root.get("goals"); goals.present()) {
     goals.list("a list of [x, y] points");
+    if (goals.size() > kMaxMapGoals) {
+      goals.fail("has " + std::to_string(goals.size()) + " goals, beyond the bound of " + std::to_string(kMaxMapGoals) + " per map");
+    }
     map.goals.reserve(goals.size());
     for (std::size_t i = 0; i < goals.size(); ++i) {
       // A goal inside an obstacle is kept: whether it is reachable is the scenario's business.
@@ -181,10 +185,22 @@ void savePolygonMap(const PolygonMap& map, const std::filesystem::path& path) {
 }
 
 void validatePolygonMap(const PolygonMap& map, const std::string& source) {
+  if (map.obstacles.size() > kMaxMapPolygons) {
+    throw MapError(source + ": obstacles: has " + std::to_string(map.obstacles.size()) + " polygons, beyond the bound of " +
+                   std::to_string(kMaxMapPolygons) + " per map");
+  }
+  if (map.goals.size() > kMaxMapGoals) {
+    throw MapError(source + ": goals: has " + std::to_string(map.goals.size()) + " goals, beyond the bound of " +
+                   std::to_string(kMaxMapGoals) + " per map");
+  }
   if (map.bounds) {
     if (std::string e = boundsProblem(*map.bounds); !e.empty()) throw MapError(source + ": bounds: " + e);
   }
   for (std::size_t i = 0; i < map.obstacles.size(); ++i) {
+    if (map.obstacles[i].size() > kMaxPolygonVertices) {
+      throw MapError(source + ": " + indexed("obstacles", i) + ": has " + std::to_string(map.obstacles[i].size()) +
+                     " points, beyond the bound of " + std::to_string(kMaxPolygonVertices) + " vertices per polygon");
+    }
     if (std::string e = polygonProblem(map.obstacles[i]); !e.empty()) throw MapError(source + ": " + indexed("obstacles", i) + ": " + e);
   }
   for (std::size_t i = 0; i < map.goals.size(); ++i) {

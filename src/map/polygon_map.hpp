@@ -11,6 +11,12 @@
 
 namespace staa {
 
+// Bounds of a map file (docs/ARCHITECTURE.md, "Input bounds"); a file beyond one is refused
+// naming it. Far above any real map: the office has 40 polygons of at most 40 vertices.
+inline constexpr std::size_t kMaxPolygonVertices = 1'000'000;
+inline constexpr std::size_t kMaxMapPolygons = 100'000;
+inline constexpr std::size_t kMaxMapGoals = 100'000;
+
 struct PolygonMap {
   std::string name;
   // Optional bounds [xmin, ymin, xmax, ymax]; everything outside is blocked.

@@ -90,6 +90,11 @@ class PgmCursor {
 };
 
 std::string readFile(const std::filesystem::path& path, const char* what) {
+  std::error_code ec;
+  if (const auto size = std::filesystem::file_size(path, ec); !ec && size > kMaxPgmFileBytes) {
+    throw MapError(path.string() + ": " + std::to_string(size) + " bytes, beyond the bound of " +
+                   std::to_string(kMaxPgmFileBytes) + " bytes for a " + what);
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw MapError(path.string() + ": cannot open " + what);
   std::ostringstream s;
@@ -123,7 +128,7 @@ RosMapInfo readRosMapInfo(const io::ConfigValue& root, bool image_must_exist) {
     const std::optional<double> n = yaml_support::readNumber(negate.node());
     if (n && (*n == 0.0 || *n == 1.0)) {
       info.negate = *n == 1.0;
-    } else if (bool on = false; negate.node().IsScalar() && YAML::convert<bool>::decode(negate.node(), on)) {
+    } else if (bool on = false; negate.node().IsScalar() && io::decodeYamlBool(negate.node().Scalar(), on)) {
       info.negate = on;
     } else {
       negate.fail("must be 0 or 1, got " + negate.text());
@@ -358,9 +363,8 @@ PgmImage parsePgm(std::string_view bytes, const std::string& source) {
   if (in.remaining() > 0 && !isSpace(bytes[2]) && bytes[2] != '#') in.fail("malformed PGM: no whitespace after the magic number");
 
   PgmImage image;
-  constexpr long kMaxSide = 1 << 16;
-  image.width = static_cast<int>(in.readNumber("width", 1, kMaxSide));
-  image.height = static_cast<int>(in.readNumber("height", 1, kMaxSide));
+  image.width = static_cast<int>(in.readNumber("width", 1, kMaxPgmSide));
+  image.height = static_cast<int>(in.readNumber("height", 1, kMaxPgmSide));
   image.maxval = static_cast<int>(in.readNumber("maxval", 1, 65535));
   const std::size_t count = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
 

@@ -47,6 +47,10 @@ struct PgmImage {
 
 // Parses P5 (binary; 8-bit, or 16-bit big-endian when maxval > 255) and P2 (ASCII) images.
 // `source` names the file for errors; malformed or truncated input throws MapError.
+// Bounds (docs/ARCHITECTURE.md, "Input bounds"): a PGM file of at most kMaxPgmFileBytes, a
+// side of at most kMaxPgmSide pixels, and no more pixels than the file's bytes hold.
+inline constexpr std::size_t kMaxPgmFileBytes = 256u << 20;
+inline constexpr long kMaxPgmSide = 1 << 16;
 PgmImage parsePgm(std::string_view bytes, const std::string& source);
 PgmImage loadPgm(const std::filesystem::path& path);  // throws MapError
 

@@ -71,6 +71,11 @@ class GlobalPathPlanner {
   const PolygonSet& realObstacleSet() const { return real_set_; }
   // True when p lies strictly inside a real obstacle or outside the bounds.
   bool insideRealObstacle(const Vec2& p) const;
+  // Forgets what the searches kept from earlier queries (MinimalConstruct::forgetGoal).
+  void forgetSearches() {
+    static_search_.forgetGoal();
+    dynamic_search_.forgetGoal();
+  }
 
  private:
   GlobalPath run(MinimalConstruct& search, const Vec2& start, const Vec2& goal, bool with_dynamic,

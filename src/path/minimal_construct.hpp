@@ -72,6 +72,12 @@ class MinimalConstruct {
   // beyond the capacity is dropped and counted in droppedDynamicPolygons().
   void setDynamicObstacles(std::span<const PolygonView> polygons);
   void clearDynamicObstacles();
+  // Forgets the search tree and the polygons kept for the last goal: the next query starts
+  // as on a new instance (a replay from that point then repeats the same work).
+  void forgetGoal() {
+    tree_valid_ = false;
+    have_goal_ = false;
+  }
 
   const PolygonSet& staticObstacles() const { return static_; }
   const PolygonSet& dynamicObstacles() const { return dynamic_; }

@@ -80,6 +80,11 @@ class Heuristic {
   std::uint64_t queries() const { return queries_; }
   // The path of the last Path-RTR / Path-Euclid query (for drawing).
   std::span<const Vec2> lastPath() const { return last_path_; }
+  // Forgets what the searches kept from earlier cycles (MinimalConstruct::forgetGoal).
+  void forgetSearches() {
+    static_search_.forgetGoal();
+    for (MinimalConstruct& mc : dynamic_search_) mc.forgetGoal();
+  }
 
  private:
   double evaluatePath(const UnicycleState& s, int depth);

@@ -138,6 +138,8 @@ class StaaStar {
   const StaaConfig& config() const { return config_; }
   const ActionSet& actions() const { return actions_; }
   Heuristic& heuristic() { return heuristic_; }
+  // Forgets what the heuristic's searches kept from earlier cycles.
+  void forgetSearches() { heuristic_.forgetSearches(); }
   void setTiming(bool on) { timing_ = on; }
 
  private:

@@ -14,7 +14,8 @@ bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 bool sameRequest(const Request& a, const Request& b) {
   return a.kind == b.kind && sameBits(a.pose.x, b.pose.x) && sameBits(a.pose.y, b.pose.y) &&
          sameBits(a.pose.theta, b.pose.theta) && a.goal_id == b.goal_id && a.debug == b.debug &&
-         a.debug_ms == b.debug_ms && a.debug_on == b.debug_on;
+         a.debug_ms == b.debug_ms && a.debug_on == b.debug_on &&
+         std::string_view(a.file.data()) == std::string_view(b.file.data());
 }
 }  // namespace
 

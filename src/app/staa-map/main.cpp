@@ -122,10 +122,7 @@ ObstacleStats obstacleStats(const PolygonMap& map) {
       st.extent->max = st.extent->max.cwiseMax(b.max);
     }
   }
-  for (const auto& region : staa::unitePolygons(map.obstacles)) {
-    st.area += std::abs(staa::signedArea(region.outer));
-    for (const auto& hole : region.holes) st.area -= std::abs(staa::signedArea(hole));
-  }
+  st.area = staa::unionArea(map.obstacles);
   st.non_convex = map.obstacles.size() - st.convex;
   return st;
 }

@@ -21,6 +21,7 @@
 #include "world/world.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
+#include "record/recording.hpp"
 
 #include "app/cli_support.hpp"
 #include "app/staa-sim/experiment_command.hpp"
@@ -620,7 +621,8 @@ void loadMultiMap(MultiRequest& rq, const std::string& map_file) {
 
 // The command line, typed and checked by CLI11.
 struct Args {
-  std::string map_file, scenario_file, start_text, goal_text, robot_file, json_file, svg_dir;
+  std::string map_file, scenario_file, start_text, goal_text, robot_file, json_file, svg_dir, record_file;
+  std::string command_line;  // for the recording's session
   staa::ControllerKind controller = staa::ControllerKind::kStaa;
   staa::SimMode mode = staa::SimMode::kCooperative;
   int agents = 1;
@@ -693,6 +695,9 @@ void addOptions(staa::cli::CommandLine& cl, Args& a) {
       ->transform(cli::count("cycles between frames", 1, 1'000'000))
       ->capture_default_str();
   app.add_flag("--quiet", a.quiet, "No progress on stderr (the summary line on stdout remains)");
+  app.add_option("--record", a.record_file,
+                 "Record every cycle of every agent into this MCAP file (the flight recorder's format: "
+                 "staa-replay reruns it, Foxglove plots it)");
 }
 
 // What the options mean together, before anything is loaded.
@@ -719,6 +724,28 @@ void validate(const Args& a) {
   }
 }
 
+// The part of a recording's session the command line knows (the runner adds the rest).
+staa::record::Session recordSession(const Args& a, const staa::BudgetSpec& budget) {
+  staa::record::Session s;
+  s.source = "staa-sim";
+  s.software = staa::record::softwareVersion();
+  s.build_type = staa::record::buildType();
+  s.recorded_at = staa::record::utcNow();
+  s.budget = budget.describe();
+  s.config_text = a.command_line;
+  return s;
+}
+
+// --record: a path that cannot be written fails before a long run, not after it.
+void checkRecordOutput(const std::string& file) {
+  if (file.empty()) return;
+  const fs::path parent = fs::path(file).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) fs::create_directories(parent, ec);
+  std::ofstream probe(file, std::ios::binary | std::ios::trunc);
+  if (!probe) throw InputError("--record: cannot write '" + file + "'");
+}
+
 staa::SimOptions simOptions(const Args& a) {
   staa::SimOptions o;
   o.duration_s = a.duration_s;
@@ -729,6 +756,8 @@ staa::SimOptions simOptions(const Args& a) {
   o.control.rate_hz = a.rate_hz;
   o.control.staa.heuristic.kind = a.heuristic;
   o.obstacles = a.obstacles;
+  o.record_path = a.record_file;
+  if (!a.record_file.empty()) o.record_session = recordSession(a, o.budget);
   return o;
 }
 
@@ -809,8 +838,11 @@ MultiRequest multiRequest(const Args& a) {
   m.rate_hz = a.rate_hz;
   m.budget = a.budget->spec(a.rate_hz);
   m.seed = a.seed;
-  m.control = simOptions(a).control;
+  const staa::SimOptions single = simOptions(a);
+  m.control = single.control;
   m.obstacles = a.obstacles;
+  m.record_path = single.record_path;
+  m.record_session = single.record_session;
   rq.robot = a.robot_file.empty() ? staa::paperAgentProfile() : staa::loadRobotProfile(a.robot_file);
   requireCamera(a, rq.robot);
   loadMultiMap(rq, a.map_file);
@@ -829,6 +861,8 @@ int run(int argc, char** argv) {
   addOptions(cl, args);
   if (const auto exit = cl.parse(argc, argv)) return *exit;
   validate(args);
+  for (int i = 0; i < argc; ++i) args.command_line += (i > 0 ? " " : "") + std::string(argv[i]);
+  checkRecordOutput(args.record_file);
   if (args.multi()) {
     MultiRequest rq = multiRequest(args);
     return simulateMulti(rq);

@@ -2,7 +2,7 @@
 //
 //   staactl [--socket PATH] goal X Y [TH] [--wait [--timeout S]] | stop | pose X Y [TH]
 //                           | status [--json] | wait [--timeout S] [--state STATE]
-//                           | histograms [--json]
+//                           | histograms [--json] | record save FILE
 //
 // The socket is --socket, else $STAAD_SOCKET, else /run/staad/staad.sock. One request line
 // out, one reply line back (protocol.hpp), with a 2 s limit on the whole exchange: a daemon
@@ -28,6 +28,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -415,6 +416,10 @@ int run(int argc, char** argv) {
   std::string wanted = "reached";
   wait->add_option("--timeout", timeout_text, "seconds (default 120)");
   wait->add_option("--state", wanted, "the state to wait for (default reached)");
+  CLI::App* record = app.add_subcommand("record", "the flight recorder: record save FILE writes its last recorder.seconds");
+  std::string record_action, record_file;
+  record->add_option("ACTION", record_action, "save")->required();
+  record->add_option("FILE", record_file, "the MCAP file to write (staa-replay reads it)")->required();
 
   try {
     app.parse(argc, argv);
@@ -432,7 +437,7 @@ int run(int argc, char** argv) {
         if (arg == "--socket") {
           ++i;
         } else if (!arg.empty() && arg.front() != '-') {
-          std::cerr << "staactl: unknown command " << inQuotes(arg) << " (expected goal, pose, stop, status, histograms or wait; try --help)\n";
+          std::cerr << "staactl: unknown command " << inQuotes(arg) << " (expected goal, pose, stop, status, histograms, wait or record; try --help)\n";
           return kExitBadInput;
         }
       }
@@ -489,6 +494,19 @@ int run(int argc, char** argv) {
     } else {
       printHistograms(h);
     }
+    return kExitOk;
+  } else if (record->parsed()) {
+    if (record_action != "save") throw InputError("record: expected save FILE, got " + inQuotes(record_action));
+    std::error_code ec;
+    const std::string file = std::filesystem::absolute(record_file, ec).lexically_normal().string();
+    if (ec || file.size() > staa::staad::kMaxRecordFile) {
+      throw InputError("record save: " + inQuotes(record_file) + " is not a usable path (at most " +
+                       std::to_string(staa::staad::kMaxRecordFile) + " bytes)");
+    }
+    request.kind = staa::staad::RequestKind::kRecord;
+    std::copy(file.begin(), file.end(), request.file.begin());
+    const Json reply = ask(socket_path, request);
+    std::cout << "saving to " << reply.value("file", file) << std::endl;
     return kExitOk;
   } else if (wait->parsed()) {
     const double timeout = timeoutSeconds("wait", timeout_text);

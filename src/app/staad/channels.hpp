@@ -8,6 +8,7 @@
 //   control    --command-->    base                                 (triple buffer)
 //   control    --status-->     service                              (triple buffer)
 //   control    --telemetry-->  service                              (SPSC ring)
+//   control    --recorder-->   service                              (SPSC byte ring: encoded cycles)
 //   service    --maps-->       control   --retired_maps--> service  (SPSC rings, ROS maps)
 //   control    --plan-->       service                              (triple buffer, RViz)
 //   each RT thread --*_log-->  service                              (SPSC rings)
@@ -22,6 +23,7 @@
 #include "map/polygon_map.hpp"
 #include "hal/base.hpp"
 #include "hal/obstacles.hpp"
+#include "rt/byte_ring.hpp"
 #include "rt/log_ring.hpp"
 #include "rt/spsc_ring.hpp"
 #include "rt/triple_buffer.hpp"
@@ -82,7 +84,10 @@ struct PlanSnapshot {
 };
 
 struct Channels {
-  explicit Channels(std::size_t telemetry_records) : telemetry(telemetry_records) {}
+  // recorder_bytes: the flight recorder's ring (0: no recorder).
+  explicit Channels(std::size_t telemetry_records, std::size_t recorder_bytes = 0)
+      : telemetry(telemetry_records),
+        recorder(recorder_bytes > 0 ? std::make_unique<rt::ByteRing>(recorder_bytes) : nullptr) {}
   Channels(const Channels&) = delete;
   Channels& operator=(const Channels&) = delete;
 
@@ -93,6 +98,7 @@ struct Channels {
   rt::TripleBuffer<CommandSlot> command;
   rt::TripleBuffer<Status> status;
   TelemetryRing telemetry;
+  std::unique_ptr<rt::ByteRing> recorder;  // the flight recorder's encoded cycles; null: off
   rt::LogRing control_log;
   rt::LogRing base_log;
   rt::LogRing perception_log;

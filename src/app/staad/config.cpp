@@ -549,6 +549,26 @@ void readTelemetry(const ConfigValue& root, DaemonConfig& config) {
   }
 }
 
+void readRecorder(const ConfigValue& root, DaemonConfig& config) {
+  const ConfigValue r = root.section("recorder", {"enabled", "seconds", "path", "max_file_mb", "max_files", "fault_dir",
+                                                  "fault_after_s", "ring_kb"});
+  RecorderConfig& c = config.recorder;
+  if (const ConfigValue v = r.get("enabled"); v.given()) c.enabled = v.boolean();
+  if (const ConfigValue v = r.get("seconds"); v.given()) c.seconds = v.number(Range::closed(1.0, 3600.0, "s"));
+  for (const auto& [key, out] : {std::pair<std::string_view, fs::path*>{"path", &c.path}, {"fault_dir", &c.fault_dir}}) {
+    const ConfigValue p = r.get(key);
+    if (!p.given()) continue;
+    const std::string text = p.present() ? p.string("a path, or \"\" for off") : std::string();
+    *out = text.empty() ? fs::path() : p.path().lexically_normal();
+  }
+  if (const ConfigValue v = r.get("max_file_mb"); v.given()) c.max_file_mb = static_cast<std::uint64_t>(v.integer(1, 65536));
+  if (const ConfigValue v = r.get("max_files"); v.given()) c.max_files = static_cast<std::size_t>(v.integer(1, 10000));
+  if (const ConfigValue v = r.get("fault_after_s"); v.given()) c.fault_after_s = v.number(Range::closed(0.0, 60.0, "s"));
+  if (const ConfigValue v = r.get("ring_kb"); v.given()) {
+    c.ring_kb = static_cast<std::size_t>(v.integer(256, 262144, " (the ring between the control and service threads)"));
+  }
+}
+
 void readMemory(const ConfigValue& root, DaemonConfig& config) {
   const ConfigValue memory = root.section("memory", {"heap_prefault_mb", "stack_prefault_kb"});
   if (const ConfigValue n = memory.get("heap_prefault_mb"); n.given()) {
@@ -568,8 +588,8 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   const fs::path base = (ec ? source : absolute).parent_path();
   const io::ConfigDocument doc = io::ConfigDocument::parse(yaml_text, source.string(), base);
   const ConfigValue& root = doc.root(kFormat, {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "camera", "rates",
-                                               "budget", "threads", "socket", "limits", "goal", "telemetry", "memory", "debug",
-                                               "ros"});
+                                               "budget", "threads", "socket", "limits", "goal", "telemetry", "recorder", "memory",
+                                               "debug", "ros"});
   DaemonConfig config;
   config.file = source;
   if (const ConfigValue hal = root.get("hal"); hal.given()) config.hal = hal.choice<HalBackend>(kHalBackends);
@@ -588,10 +608,12 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   readLimits(root, config);
   readGoal(root, config);
   readTelemetry(root, config);
+  readRecorder(root, config);
   readMemory(root, config);
   readDebug(root, config);
   readRos(root, config);
   config.control.rate_hz = config.control_hz;
+  config.text = yaml_text;
   return config;
 }
 

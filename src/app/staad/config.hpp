@@ -32,6 +32,8 @@
 //   limits: {odometry_timeout_s: 0.1, obstacles_timeout_s: 0.2}
 //   goal: {tolerance_m: 0.2, heading_tolerance: 0.4}
 //   telemetry: {path: "", records: 4096, svg: ""}  # empty path: off; svg: the run's picture
+//   recorder: {enabled: true, seconds: 30, path: "", max_file_mb: 64, max_files: 8,
+//              fault_dir: "", fault_after_s: 2, ring_kb: 4096}  # the flight recorder
 //   memory: {heap_prefault_mb: 64, stack_prefault_kb: 256}
 //   debug: {faults: false}                   # true: the socket's fault-injection requests (tests)
 //   debug: {faults: true, extra_cycle_us: 0}  # 0..1000000: the control cycle busy-waits that long
@@ -132,6 +134,19 @@ struct RosConfig {
   double diagnostics_hz = 1.0;
 };
 
+// The flight recorder (docs/staad.md, "Flight recorder"): every cycle into a ring the
+// service thread drains; the last `seconds` kept for `staactl record save` and fault files.
+struct RecorderConfig {
+  bool enabled = true;
+  double seconds = 30.0;
+  std::filesystem::path path;          // continuous recording, rotating files; empty: off
+  std::uint64_t max_file_mb = 64;
+  std::size_t max_files = 8;
+  std::filesystem::path fault_dir;     // a file per fault; empty: off
+  double fault_after_s = 2.0;
+  std::size_t ring_kb = 4096;          // control thread -> service thread
+};
+
 struct DaemonConfig {
   std::filesystem::path file;        // where it was loaded from
   std::filesystem::path robot_file;
@@ -166,6 +181,8 @@ struct DaemonConfig {
   std::filesystem::path telemetry_path;  // empty: off
   std::size_t telemetry_records = 4096;  // ring capacity (records)
   std::filesystem::path svg_path;        // the run's picture, written at shutdown; empty: off
+  RecorderConfig recorder;
+  std::string text;                      // the config file as read (the recordings keep it)
   std::size_t heap_prefault_bytes = 64u << 20;
   std::size_t stack_prefault_bytes = 256u << 10;
   ControlConfig control;  // rate_hz = control_hz; goal tolerances from `goal`

@@ -20,9 +20,16 @@ ControlConfig controlConfigOf(const DaemonConfig& config) {
 // The monotonic clock is read through the control thread's stall probe.
 bool probedClock(const rt::Clock& clock) { return clock.nowFunction() == &rt::monotonicNow; }
 
+// A wall-clock budget's clock: the monotonic clock through the stall probe, else the clock's
+// own function (null with an expansion budget: it reads no clock).
+ClockFn budgetClockOf(const DaemonConfig& config, const rt::Clock& clock) {
+  if (config.budget.isExpansions()) return nullptr;
+  return probedClock(clock) ? &rt::StallProbe::now : clock.nowFunction();
+}
+
 PlannerBudget budgetOf(const DaemonConfig& config, const rt::Clock& clock) {
   if (config.budget.isExpansions()) return config.budget.make();  // reads no clock
-  const rt::Clock::NowFunction now = probedClock(clock) ? &rt::StallProbe::now : clock.nowFunction();
+  const ClockFn now = budgetClockOf(config, clock);
   if (now == nullptr) {
     throw std::invalid_argument(
         "ControlTask: a wall-clock budget (budget.ms) needs a clock the planner can read (the monotonic clock), "
@@ -102,11 +109,23 @@ ControlTask::ControlTask(const DaemonConfig& config, Channels& channels, rt::Clo
       probed_(probedClock(clock)),
       extra_cycle_(static_cast<rt::Nanos>(config.debug_extra_cycle_us) * 1000),
       budget_(budgetOf(config, clock)),
+      budget_spec_(config.budget),
+      budget_clock_(budgetClockOf(config, clock)),
       budget_ms_(config.budget.isExpansions() ? 0.0 : config.budget.ms),
       limits_(config.robot.limits),
       own_cycle_(config.map, config.robot, controlConfigOf(config)),
       cycle_(&own_cycle_),
-      obstacles_(own_cycle_.obstacleCapacity()) {}
+      obstacles_(own_cycle_.obstacleCapacity()) {
+  if (ch_.recorder) {
+    record::RecordLimits limits;
+    limits.obstacles = hal::ObstacleFrame::kMaxObstacles;
+    limits.vertices = hal::ObstacleFrame::kMaxVertices;
+    limits.path_points = 4096;  // the held path's capacity
+    limits.trajectory = 256;
+    recorder_sink_ = std::make_unique<RingSink>(*ch_.recorder);
+    recorder_ = std::make_unique<record::CycleRecorder>(limits, *recorder_sink_);
+  }
+}
 
 ControlConfig controlConfigFor(const DaemonConfig& config) { return controlConfigOf(config); }
 
@@ -128,6 +147,7 @@ void ControlTask::takeMap(rt::Nanos now) {
   map_ = next;
   cycle_ = map_->cycle.get();
   if (has_goal_) cycle_->setGoal(goal_);
+  if (recorder_) recorder_->newCycle();
   ch_.maps_taken.fetch_add(1, std::memory_order_release);
   log(now, rt::LogLevel::kInfo, "map swapped in (sequence)", static_cast<double>(map_->sequence), 0.0, 0.0, 1);
 }
@@ -167,10 +187,15 @@ void ControlTask::takeRequests(rt::Nanos now) {
         break;
       case RequestKind::kPose:
         // Only the base thread may call Base::setPose.
-        if (!ch_.poses.push(request.pose)) log(now, rt::LogLevel::kWarning, "pose request dropped: the base thread's ring is full");
+        if (!ch_.poses.push(request.pose)) {
+          log(now, rt::LogLevel::kWarning, "pose request dropped: the base thread's ring is full");
+        } else if (recorder_) {
+          recorder_->poseCorrected();
+        }
         break;
       case RequestKind::kStatus:  // answered by the service thread itself
       case RequestKind::kHistograms:
+      case RequestKind::kRecord:
       case RequestKind::kDebug: break;  // carried out through Channels' debug atomics
     }
   }
@@ -209,6 +234,7 @@ void ControlTask::takeInputs() {
     // set() copies (hulls) the polygons: the views may dangle after the next update().
     obstacles_.set(std::span<const PolygonView>(views_.data(), n), std::span<const Vec2>(velocities_.data(), n),
                    std::span<const double>(turn_rates_.data(), n));
+    frame_n_ = n;
     obstacles_stamp_ = frame.stamp;
   }
 }
@@ -266,26 +292,47 @@ void ControlTask::step(rt::Nanos now) {
   const FaultKind fault = judgeInputs(now);
 
   const hal::Odometry& odo = base_.odometry;
+  const UnicycleState robot{odo.pose.x, odo.pose.y, odo.pose.theta, odo.v, odo.w};
   CycleOutput& out = last_output_;
+  PlannerBudget budget = budget_;
+  if (recorder_) {
+    // The frame's polygons as handed to obstacles_.set (the views stay valid until the next
+    // frame is taken), and the budget with its clock tapped.
+    recorder_->obstacles({std::span<const PolygonView>(views_.data(), frame_n_),
+                          std::span<const Vec2>(velocities_.data(), frame_n_),
+                          std::span<const double>(turn_rates_.data(), frame_n_)});
+    budget = recorder_->before(*cycle_, budget_spec_, budget_clock_);
+  }
+  record::StepKind step_kind = record::StepKind::kStepped;
   if (fault != FaultKind::kNone) {
     // Brake; the planner does not run on inputs it cannot trust.
     out = CycleOutput{};
     setState(now, DaemonState::kFault, fault);
     publishCommand(now, nullptr);
+    step_kind = record::StepKind::kFault;
   } else if (stopped_) {
     out = CycleOutput{};
     setState(now, DaemonState::kStopped, fault);
     publishCommand(now, nullptr);
+    step_kind = record::StepKind::kStopped;
   } else {
     // 4. One cycle of the paper's Sec. III.
     CycleInputs in;
-    in.robot = UnicycleState{odo.pose.x, odo.pose.y, odo.pose.theta, odo.v, odo.w};
+    in.robot = robot;
     in.obstacles = &obstacles_;
-    out = cycle_->step(in, budget_);
+    out = cycle_->step(in, budget);
     path_max_ = std::max<rt::Nanos>(path_max_, out.path_ns);
     local_max_ = std::max<rt::Nanos>(local_max_, out.local_ns);
     setState(now, fromCycleState(out.state), fault);
     publishCommand(now, &out);
+  }
+  if (recorder_) {
+    // 8. The cycle for the flight recorder (after the command went out: it never waits for this).
+    const hal::VelocityCommand& c = last_command_.command;
+    const hal::VelocityCommand& n = last_command_.next;
+    recorder_->after(*cycle_, now, robot, step_kind, static_cast<std::uint8_t>(fault),
+                     step_kind == record::StepKind::kStepped ? &out : nullptr, {c.v, c.w, c.brake, n.v, n.w, n.brake},
+                     static_cast<std::uint32_t>(mapSequence()));
   }
   ++cycles_;
   publishStatus(now);

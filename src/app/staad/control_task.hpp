@@ -16,7 +16,9 @@
 //   6. the status published;
 //   6b. with plan_wanted, the plan's snapshot for RViz;
 //   7. a telemetry record (always: the service thread writes the CSV file and/or keeps the
-//      poses for the run's SVG picture), and log records on state changes and faults.
+//      poses for the run's SVG picture), and log records on state changes and faults;
+//   8. with the flight recorder (Channels::recorder), the cycle encoded into its ring: what
+//      the cycle saw, carried and put out (record/recorder.hpp).
 // No allocation, no lock, no I/O: everything is sized by the constructor.
 //
 // On the monotonic clock the cycle reads its clock through the thread's stall probe
@@ -28,6 +30,7 @@
 #include "control/control_cycle.hpp"
 #include "local/dynamic_obstacles.hpp"
 #include "planner/budget.hpp"
+#include "record/recorder.hpp"
 #include "rt/activity.hpp"
 #include "rt/clock.hpp"
 #include "rt/periodic.hpp"
@@ -94,6 +97,17 @@ class ControlTask final : public rt::Runnable {
   void log(rt::Nanos now, rt::LogLevel level, const char* message, double a = 0.0, double b = 0.0, double c = 0.0,
            std::uint8_t count = 0);
 
+  // The flight recorder's sink: a push into Channels::recorder (a full ring drops the cycle
+  // and counts it; never a wait).
+  class RingSink final : public record::CycleSink {
+   public:
+    explicit RingSink(rt::ByteRing& ring) : ring_(ring) {}
+    void take(std::span<const std::byte> record) override { ring_.push(record); }
+
+   private:
+    rt::ByteRing& ring_;
+  };
+
   Channels& ch_;
   rt::Clock& clock_;
   rt::Nanos period_;
@@ -103,6 +117,8 @@ class ControlTask final : public rt::Runnable {
   rt::Nanos last_stall_ = 0;
   rt::Nanos extra_cycle_;      // debug.extra_cycle_us: busy-waited every cycle
   PlannerBudget budget_;
+  BudgetSpec budget_spec_;
+  ClockFn budget_clock_;       // a wall-clock budget's clock (the recorder taps it)
   double budget_ms_;           // the wall-clock budget, 0 with an expansion budget
   rt::Nanos path_max_ = 0;     // the longest path and local-map steps so far
   rt::Nanos local_max_ = 0;
@@ -115,6 +131,9 @@ class ControlTask final : public rt::Runnable {
   std::array<PolygonView, hal::ObstacleFrame::kMaxObstacles> views_{};
   std::array<Vec2, hal::ObstacleFrame::kMaxObstacles> velocities_{};
   std::array<double, hal::ObstacleFrame::kMaxObstacles> turn_rates_{};
+  std::size_t frame_n_ = 0;    // obstacles of the frame taken last (views_ .. turn_rates_)
+  std::unique_ptr<RingSink> recorder_sink_;
+  std::unique_ptr<record::CycleRecorder> recorder_;
 
   // Inputs as last taken.
   BaseSample base_;

@@ -20,6 +20,8 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <ostream>
@@ -64,6 +66,7 @@ class Daemon {
   void stopThreads();
   void reportTiming(const rt::PeriodicActivity* activity);
   void say(const std::string& line) { log_ << "staad: " << line << std::endl; }
+  void createRecorder();
 
   DaemonConfig config_;
   rt::Clock& clock_;
@@ -80,6 +83,7 @@ class Daemon {
   std::unique_ptr<RosBridge> ros_;                  // the ROS link (config ros)
 #endif
   std::unique_ptr<ControlTask> task_;
+  std::unique_ptr<record::RecordingService> recording_;  // the flight recorder's files (service thread)
   std::unique_ptr<BaseTask> base_task_;
   std::unique_ptr<PerceptionTask> perception_task_;
   std::unique_ptr<Service> service_;
@@ -99,7 +103,8 @@ void Daemon::createWorkspaces() {
     throw ConfigError(e.what());
   }
 
-  channels_ = std::make_unique<Channels>(config_.telemetry_records);
+  channels_ = std::make_unique<Channels>(config_.telemetry_records,
+                                         config_.recorder.enabled ? config_.recorder.ring_kb * 1024 : 0);
   createRosLink();
   startRosLink();  // before anything is built on the map
 
@@ -162,6 +167,7 @@ void Daemon::createWorkspaces() {
     obstacles = no_obstacles_.get();
   }
   task_ = std::make_unique<ControlTask>(config_, *channels_, clock_);
+  createRecorder();
 #ifdef STAA_HAVE_ROS1
   if (ros_) ros_->acceptMapsForControl();
 #endif
@@ -177,11 +183,41 @@ void Daemon::createWorkspaces() {
   so.svg_path = config_.svg_path;
   so.watchdog_interval = watchdog;
   so.debug_faults = config_.debug_faults;
+  so.recorder = recording_.get();
   service_ = std::make_unique<Service>(*channels_, *notifier_, so, log_);
 #ifdef STAA_HAVE_ROS1
   if (ros_) service_->completeStatusWith([this](Status& s) { ros_->fillStatus(s); });
 #endif
   service_->open();
+}
+
+// The flight recorder's service half: the session every file carries (the control cycle's
+// exact configuration, the robot, the map, this config's text), its files and history.
+void Daemon::createRecorder() {
+  if (!config_.recorder.enabled) return;
+  record::Session session;
+  session.source = "staad";
+  session.software = record::softwareVersion();
+  session.build_type = record::buildType();
+  session.recorded_at = record::utcNow();
+  session.budget = config_.budget.describe();
+  session.control = task_->controlCycle().config();
+  session.robot = config_.robot;
+  session.map = config_.map;
+  session.agents = {{0, "staa"}};
+  session.config_text = config_.text;
+  if (!config_.robot_file.empty()) {
+    std::ifstream in(config_.robot_file);
+    session.robot_text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  record::RecorderOptions o;
+  o.path = config_.recorder.path;
+  o.max_file_bytes = config_.recorder.max_file_mb << 20;
+  o.max_files = config_.recorder.max_files;
+  o.seconds = config_.recorder.seconds;
+  o.fault_dir = config_.recorder.fault_dir;
+  o.fault_after_s = config_.recorder.fault_after_s;
+  recording_ = std::make_unique<record::RecordingService>(std::move(session), o, [this](const std::string& line) { say(line); });
 }
 
 // The ROS link's objects (the base backend of hal: ros among them); nothing starts yet.
@@ -324,6 +360,13 @@ void Daemon::shutdown() {
   for (const rt::PeriodicActivity* a : {control_.get(), base_.get(), perception_.get()}) reportTiming(a);
   service_->writeRunSvg(config_.map, config_.robot.footprint);
   service_->close();
+  if (recording_) {
+    recording_->close();
+    const record::RecorderStats& r = recording_->stats();
+    say("recorder: " + std::to_string(r.cycles) + " cycles recorded, " + std::to_string(r.files) + " files, " +
+        std::to_string(r.fault_files) + " fault files" +
+        (r.write_failures > 0 ? ", " + std::to_string(r.write_failures) + " write failures (" + r.last_error + ")" : std::string()));
+  }
 }
 
 int Daemon::run() {

@@ -71,7 +71,7 @@ const char* kindName(const Json& v) {
   }
 }
 
-constexpr const char* kCommands = "goal, pose, stop, status or histograms";
+constexpr const char* kCommands = "goal, pose, stop, status, histograms or record";
 
 // A second, reporting-only pass over a line that nlohmann refused with out_of_range (a
 // number beyond a double, such as 1e999): the DOM parser does not say which key held it.
@@ -107,7 +107,8 @@ class OverflowLocator final : public nlohmann::json_sax<Json> {
 
 std::optional<RequestKind> commandKind(const std::string& cmd) {
   for (const RequestKind k :
-       {RequestKind::kGoal, RequestKind::kPose, RequestKind::kStop, RequestKind::kStatus, RequestKind::kHistograms}) {
+       {RequestKind::kGoal, RequestKind::kPose, RequestKind::kStop, RequestKind::kStatus, RequestKind::kHistograms,
+        RequestKind::kRecord}) {
     if (cmd == toString(k)) return k;
   }
   return std::nullopt;
@@ -179,6 +180,32 @@ std::variant<Request, std::string> parseDebug(const Json& j) {
   return request;
 }
 
+// The deepest nesting of objects and arrays in `line`, brackets in strings not counted; stops
+// counting past `limit`.
+std::size_t nestingDepth(std::string_view line, std::size_t limit) {
+  std::size_t depth = 0, deepest = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : line) {
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      deepest = std::max(deepest, ++depth);
+      if (deepest > limit) break;
+    } else if ((c == '}' || c == ']') && depth > 0) {
+      --depth;
+    }
+  }
+  return deepest;
+}
+
 }  // namespace
 
 std::variant<Request, std::string> parseRequest(std::string_view line) {
@@ -190,6 +217,9 @@ std::variant<Request, std::string> parseRequest(std::string_view line) {
   }
   if (line.find_first_not_of(" \t") == std::string_view::npos) {
     return std::string(R"(empty request (expected one JSON object per line, e.g. {"cmd": "status"}))");
+  }
+  if (nestingDepth(line, kMaxRequestDepth) > kMaxRequestDepth) {
+    return "nested too deep: at most " + std::to_string(kMaxRequestDepth) + " levels of objects and arrays";
   }
   Json j;
   try {
@@ -222,14 +252,30 @@ std::variant<Request, std::string> parseRequest(std::string_view line) {
   if (!kind) return "\"cmd\": unknown command " + describe(*cmd_it) + " (expected " + kCommands + ")";
 
   const bool has_pose = *kind == RequestKind::kGoal || *kind == RequestKind::kPose;
+  const bool record = *kind == RequestKind::kRecord;
   // Unknown keys are errors: a typo ("thta") must not silently become theta = 0.
   for (const auto& item : j.items()) {
     const std::string& key = item.key();
-    const bool known = key == "cmd" || (has_pose && (key == "x" || key == "y" || key == "theta"));
+    const bool known = key == "cmd" || (has_pose && (key == "x" || key == "y" || key == "theta")) || (record && key == "save");
     if (!known) {
       return "unknown key " + describe(Json(key)) + " for " + cmd + " (expected " +
-             (has_pose ? joined({"cmd", "x", "y", "theta"}) : std::string("cmd only")) + ")";
+             (has_pose ? joined({"cmd", "x", "y", "theta"}) : record ? joined({"cmd", "save"}) : std::string("cmd only")) + ")";
     }
+  }
+  if (record) {
+    // {"cmd": "record", "save": "/abs/file.mcap"}: the recorder's history into that file.
+    const auto it = j.find("save");
+    if (it == j.end()) return std::string("\"save\": missing (record needs the absolute path of the file to save to)");
+    if (!it->is_string()) return "\"save\": expected a file path, got " + describe(*it);
+    const std::string file = it->get<std::string>();
+    if (file.empty() || file.front() != '/') return "\"save\": expected an absolute path, got " + describe(*it);
+    if (file.size() > kMaxRecordFile || file.find('\0') != std::string::npos) {
+      return "\"save\": a path of at most " + std::to_string(kMaxRecordFile) + " bytes without NUL, got " + describe(*it);
+    }
+    Request request;
+    request.kind = RequestKind::kRecord;
+    std::copy(file.begin(), file.end(), request.file.begin());
+    return request;
   }
 
   Request request;
@@ -255,6 +301,7 @@ std::string requestLine(const Request& request) {
     return dumpSafe(j) + "\n";
   }
   j["cmd"] = toString(request.kind);
+  if (request.kind == RequestKind::kRecord) j["save"] = std::string(request.file.data());
   if (request.kind == RequestKind::kGoal || request.kind == RequestKind::kPose) {
     // nlohmann writes the shortest text that reads back to the same double: exact round trip.
     j["x"] = request.pose.x;
@@ -436,6 +483,21 @@ std::string statusReply(const Status& status, std::uint64_t rt_allocations) {
   Json j;  // keys sorted: "ok" comes before "status" anyway
   j["ok"] = true;
   j["status"] = statusJson(status, rt_allocations);
+  return dumpSafe(j) + "\n";
+}
+
+std::string statusReply(const Status& status, std::uint64_t rt_allocations, const nlohmann::json& recorder) {
+  Json j;
+  j["ok"] = true;
+  j["status"] = statusJson(status, rt_allocations);
+  j["status"]["recorder"] = recorder;
+  return dumpSafe(j) + "\n";
+}
+
+std::string recordReply(const std::string& file) {
+  OrderedJson j;
+  j["ok"] = true;
+  j["file"] = file;
   return dumpSafe(j) + "\n";
 }
 

@@ -7,6 +7,9 @@
 //   {"cmd": "stop"}                                     -> {"ok": true}   (brake, drop the goal)
 //   {"cmd": "status"}                                   -> {"ok": true, "status": {...}}
 //   {"cmd": "histograms"}                               -> {"ok": true, "histograms": {...}}
+//   {"cmd": "record", "save": "/abs/f.mcap"}            -> {"ok": true, "file": "/abs/f.mcap"}
+//                                                          (the flight recorder's last
+//                                                          recorder.seconds into that file)
 //                                                          (each periodic thread's wake-up and
 //                                                          execution histograms, sparse bins)
 //   {"debug": "overrun", "ms": 80}                      -> {"ok": true}   (tests: the next control
@@ -35,6 +38,9 @@
 namespace staa::staad {
 
 constexpr std::size_t kMaxRequestBytes = 4096;
+// Objects and arrays nested in one request (a request is one flat object): deeper is refused
+// before the JSON parser sees it.
+constexpr std::size_t kMaxRequestDepth = 8;
 
 // A request, or the reason it is not one (names the field and the value).
 std::variant<Request, std::string> parseRequest(std::string_view line);
@@ -69,4 +75,7 @@ std::string okReply();                             // {"ok":true}\n
 std::string goalReply(std::uint64_t goal_id);      // {"ok":true,"goal_id":N}\n
 std::string errorReply(std::string_view message);  // {"ok":false,"error":...}\n
 std::string statusReply(const Status& status, std::uint64_t rt_allocations);
+// With the flight recorder's object (status.recorder).
+std::string statusReply(const Status& status, std::uint64_t rt_allocations, const nlohmann::json& recorder);
+std::string recordReply(const std::string& file);  // {"ok":true,"file":FILE}\n
 }  // namespace staa::staad

@@ -152,6 +152,7 @@ bool Service::runOnce(rt::Nanos now, int timeout_ms) {
   latest();
   drainLogs();
   drainTelemetry();
+  drainRecorder();
   notifyStatus();
   watchdog(now);
   return terminate_;
@@ -161,6 +162,7 @@ void Service::drain() {
   latest();
   drainLogs();
   drainTelemetry();
+  drainRecorder();
 }
 
 bool Service::takeSignals() {
@@ -282,7 +284,15 @@ void Service::handleLine(Client& c, std::string_view line) {
   }
   const Request& request = std::get<Request>(parsed);
   if (request.kind == RequestKind::kStatus) {
-    c.out.append(statusReply(status(), rt::realtimeAllocations()));
+    if (options_.recorder == nullptr) {
+      c.out.append(statusReply(status(), rt::realtimeAllocations()));
+    } else {
+      c.out.append(statusReply(status(), rt::realtimeAllocations(), recorderJson()));
+    }
+    return;
+  }
+  if (request.kind == RequestKind::kRecord) {
+    handleRecord(c, request);
     return;
   }
   if (request.kind == RequestKind::kHistograms) {
@@ -445,6 +455,51 @@ void Service::watchdog(rt::Nanos now) {
     info("watchdog ping withheld: the control thread's heartbeat is not advancing");
     withheld_logged_ = true;
   }
+}
+
+void Service::drainRecorder() {
+  if (!ch_.recorder || options_.recorder == nullptr) return;
+  while (ch_.recorder->pop(recorder_record_)) options_.recorder->take(recorder_record_);
+  const std::uint64_t dropped = ch_.recorder->dropped();
+  if (dropped > recorder_dropped_seen_) {
+    info("recorder: " + std::to_string(dropped - recorder_dropped_seen_) + " cycles dropped (ring full: recorder.ring_kb)");
+    recorder_dropped_seen_ = dropped;
+  }
+}
+
+// {"cmd": "record", "save": FILE}: the last recorder.seconds into FILE, answered here.
+void Service::handleRecord(Client& c, const Request& request) {
+  if (options_.recorder == nullptr) {
+    c.out.append(errorReply("the flight recorder is off (recorder.enabled: false)"));
+    return;
+  }
+  drainRecorder();  // up to the latest cycle
+  const std::string file(request.file.data());
+  const std::string error = options_.recorder->save(file);
+  if (!error.empty()) {
+    info("recorder: record save " + file + " failed: " + error);
+    c.out.append(errorReply("record save: " + error));
+    return;
+  }
+  info("recorder: saving the last " + std::to_string(static_cast<int>(options_.recorder->options().seconds)) + " s to " + file);
+  c.out.append(recordReply(file));
+}
+
+// The recorder's status object (service side).
+nlohmann::json Service::recorderJson() const {
+  const record::RecorderStats& s = options_.recorder->stats();
+  nlohmann::json j;
+  j["cycles"] = s.cycles;
+  j["dropped"] = ch_.recorder ? ch_.recorder->dropped() : 0;
+  j["seconds"] = options_.recorder->options().seconds;
+  j["file"] = s.current_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.current_file);
+  j["bytes_written"] = s.bytes_written;
+  j["files"] = s.files;
+  j["fault_files"] = s.fault_files;
+  j["last_fault_file"] = s.last_fault_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.last_fault_file);
+  j["write_failures"] = s.write_failures;
+  j["last_error"] = s.last_error.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.last_error);
+  return j;
 }
 
 void Service::close() {

@@ -24,10 +24,13 @@
 
 #include "app/staad/channels.hpp"
 #include "app/staad/run_picture.hpp"
+#include "record/recorder.hpp"
 #include "rt/activity.hpp"
 #include "rt/sd_notify.hpp"
 #include "rt/signals.hpp"
 #include "rt/unix_socket.hpp"
+
+#include <nlohmann/json.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -59,6 +62,8 @@ struct ServiceOptions {
   std::filesystem::path svg_path;        // the run's picture at shutdown; empty: off
   std::optional<rt::Nanos> watchdog_interval;  // rt::Notifier::watchdogInterval()
   bool debug_faults = false;  // {"debug": ...} requests taken (config debug.faults), else refused
+  // The flight recorder's files (Channels::recorder drained into it); null: off. Not owned.
+  record::RecordingService* recorder = nullptr;
 };
 
 class Service {
@@ -145,6 +150,9 @@ class Service {
   bool takeSignals();
   void drainLogs();
   void drainTelemetry();
+  void drainRecorder();
+  void handleRecord(Client& client, const Request& request);
+  nlohmann::json recorderJson() const;
   void notifyStatus();
   void watchdog(rt::Nanos now);
 
@@ -172,6 +180,8 @@ class Service {
   bool withheld_logged_ = false;
   std::string last_status_text_;
   std::uint64_t telemetry_dropped_seen_ = 0;
+  std::uint64_t recorder_dropped_seen_ = 0;
+  std::vector<std::byte> recorder_record_;  // one encoded cycle, popped
   std::uint64_t last_goal_id_ = 0;  // the newest goal queued (ids start at 1)
   RunRecord run_;                   // kept only with an SVG path
   std::function<void(Status&)> complete_;

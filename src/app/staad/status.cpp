@@ -35,6 +35,7 @@ const char* toString(RequestKind kind) {
     case RequestKind::kStatus: return "status";
     case RequestKind::kDebug: return "debug";
     case RequestKind::kHistograms: return "histograms";
+    case RequestKind::kRecord: return "record";
   }
   return "unknown";
 }

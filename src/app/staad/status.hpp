@@ -8,6 +8,7 @@
 #include "rt/activity.hpp"
 #include "rt/timing_stats.hpp"
 
+#include <array>
 #include <cstdint>
 
 namespace staa::staad {
@@ -93,8 +94,12 @@ struct Status {
   RosLinkStatus ros;
 };
 
-enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus, kDebug, kHistograms };
-const char* toString(RequestKind kind);  // "goal", "stop", "pose", "status", "debug", "histograms"
+enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus, kDebug, kHistograms, kRecord };
+// "goal", "stop", "pose", "status", "debug", "histograms", "record"
+const char* toString(RequestKind kind);
+
+// The longest file name of a `record` request (bytes).
+constexpr std::size_t kMaxRecordFile = 511;
 
 // Fault injection for tests ({"debug": ...}; only with debug.faults: true in the config).
 enum class DebugKind : std::uint8_t {
@@ -118,6 +123,9 @@ struct Request {
   DebugKind debug = DebugKind::kNone;
   std::uint32_t debug_ms = 0;  // kOverrun
   bool debug_on = false;       // kStallObstacles
+  // kRecord: the file the recorder's history is saved to (absolute, NUL-terminated; the
+  // service thread answers it, it never reaches the control thread).
+  std::array<char, kMaxRecordFile + 1> file{};
 };
 
 }  // namespace staa::staad

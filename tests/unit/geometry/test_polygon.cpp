@@ -125,9 +125,57 @@ TEST(Polygon, GridSelfIntersectionBigCircle) {
   EXPECT_EQ(e->second, 100002u);
 }
 
-TEST(Polygon, SpikyStarFallsBackToTheScanWithTheSameAnswer) {
+namespace {
+// Whether edges i <= j of poly offend simplicity, as the scan judges them.
+bool offends(const Polygon& p, std::size_t i, std::size_t j) {
+  const std::size_t n = p.size();
+  if (i == j) return p[i] == p[(i + 1) % n];
+  Polygon four{p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]};
+  if (j == i + 1 || (i == 0 && j == n - 1)) {
+    // adjacent: they fold back over each other
+    const Vec2& shared = j == i + 1 ? p[j] : p[i];
+    const Vec2& a = j == i + 1 ? p[i] : p[(i + 1) % n];
+    const Vec2& b = j == i + 1 ? p[(j + 1) % n] : p[j];
+    const double c = (a - shared).x() * (b - shared).y() - (a - shared).y() * (b - shared).x();
+    return c == 0.0 && (a - shared).dot(b - shared) > 0.0;
+  }
+  return segmentsIntersect(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]);
+}
+}  // namespace
+
+TEST(Polygon, SweepDecidesSimplicityAsTheScanAndNamesAnOffendingPair) {
+  // Lattice stars (touching vertices, collinear overlaps, repeated vertices) and random
+  // lattice polygons (mostly crossing), against the quadratic scan.
+  std::size_t rejected = 0, accepted = 0;
+  std::uint64_t seed = 7;
+  for (std::uint64_t s = 1; s <= 4000; ++s) {
+    Polygon p;
+    if (s % 4 == 3) {
+      for (std::size_t k = 0; k < 4 + s % 9; ++k) {
+        seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+        p.push_back({static_cast<double>((seed >> 33) % 7), static_cast<double>((seed >> 45) % 7)});
+      }
+    } else {
+      p = randomStar(5 + s % 60, s);
+      if (s % 2 == 0) std::swap(p[s % p.size()], p[(s * 7 + 3) % p.size()]);
+    }
+    const auto sweep = findSelfIntersectionSweep(p);
+    const auto scan = findSelfIntersectionQuadratic(p);
+    ASSERT_EQ(sweep.has_value(), scan.has_value()) << "seed " << s;
+    if (sweep) {
+      ++rejected;
+      EXPECT_TRUE(offends(p, sweep->first, sweep->second)) << "seed " << s << ": " << sweep->first << ", " << sweep->second;
+    } else {
+      ++accepted;
+    }
+  }
+  EXPECT_GT(rejected, 1000u);
+  EXPECT_GT(accepted, 1000u);
+}
+
+TEST(Polygon, SpikyStarIsDecidedByTheSweep) {
   // Long spikes from near the centre: every spike's box covers a large share of any grid, so
-  // the grid is not built (its memory would grow with n^2) and the answer is the scan's.
+  // the grid is not built (its memory would grow with n^2) and the sweep decides.
   Polygon star;
   const std::size_t n = 4000;
   for (std::size_t k = 0; k < n; ++k) {
@@ -138,11 +186,28 @@ TEST(Polygon, SpikyStarFallsBackToTheScanWithTheSameAnswer) {
   EXPECT_FALSE(findSelfIntersection(star).has_value());
   std::swap(star[1001], star[1003]);  // two inner vertices swapped: their spikes cross
   const auto fast = findSelfIntersection(star);
-  const auto slow = findSelfIntersectionQuadratic(star);
   ASSERT_TRUE(fast.has_value());
-  ASSERT_TRUE(slow.has_value());
-  EXPECT_EQ(fast->first, slow->first);
-  EXPECT_EQ(fast->second, slow->second);
+  ASSERT_TRUE(findSelfIntersectionQuadratic(star).has_value());
+  // The edges around the swapped vertices are the ones that cross.
+  EXPECT_TRUE(offends(star, fast->first, fast->second));
+  EXPECT_GE(fast->first, 1000u);
+  EXPECT_LE(fast->second, 1003u);
+}
+
+TEST(Polygon, SweepHandlesAFineRingOf200000VerticesCrowdedInItsBox) {
+  // A toothed ring: its edges fill a thin band of its box, so the grid's cells are crowded.
+  Polygon ring;
+  const std::size_t n = 200000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a = 6.283185307179586 * static_cast<double>(k) / static_cast<double>(n);
+    const double r = k % 2 == 0 ? 5.0 : 4.9;
+    ring.push_back({r * std::cos(a), r * std::sin(a)});
+  }
+  EXPECT_FALSE(findSelfIntersection(ring).has_value());
+  ring[150001] = ring[50001];  // a vertex repeated far away: two edges touch there
+  const auto e = findSelfIntersection(ring);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_TRUE(offends(ring, e->first, e->second));
 }
 
 }  // namespace staa

@@ -255,5 +255,79 @@ TEST(ConfigRules, RangesAndFieldErrorsSayTheRuleUnitAndValue) {
   }
 }
 
+
+// ---- the YAML tree (libyaml) reads as yaml-cpp did ----
+
+TEST(ConfigReaderYaml, NullSpellingsBooleansAliasesAndTheFirstDocument) {
+  const ConfigDocument d = doc("a: ~\nb: null\nc:\nd: \"null\"\ne: ''\nf: NULL\n"
+                               "t: [yes, No, TRUE, off, y, on]\n"
+                               "p: &p [1.5, -2]\nq: *p\n---\nnext: 1\n");
+  const ConfigValue& r = d.root();
+  for (const char* key : {"a", "b", "c", "f"}) EXPECT_FALSE(r.get(key).present()) << key;
+  EXPECT_TRUE(r.get("c").given());
+  EXPECT_EQ(r.get("d").string("a string"), "null");
+  EXPECT_TRUE(r.get("e").present());
+  EXPECT_EQ(r.get("e").string("a string"), "");
+  const ConfigValue t = r.get("t");
+  const bool expected[] = {true, false, true, false, true, true};
+  for (std::size_t i = 0; i < 6; ++i) EXPECT_EQ(t[i].boolean(), expected[i]) << i;
+  EXPECT_EQ(r.get("q").point(), Vec2(1.5, -2.0));
+  // An alias is the node it names (shared, as in yaml-cpp): its line is the anchor's.
+  EXPECT_EQ(r.get("q").line(), 8);
+  EXPECT_FALSE(r.get("next").given());  // only the first document is read
+}
+
+// ---- input bounds (docs/ARCHITECTURE.md, "Input bounds"): one input just inside, one past ----
+
+TEST(ConfigReaderBounds, NestingOf64LevelsReadsAnd65IsRefusedNamingTheBound) {
+  const auto nested = [](std::size_t levels) { return "a: " + std::string(levels - 1, '[') + "1" + std::string(levels - 1, ']') + "\n"; };
+  // The root mapping is one level: 63 lists inside it make 64.
+  const ConfigDocument ok = doc(nested(kMaxYamlDepth));
+  EXPECT_TRUE(ok.root().get("a").present());
+  EXPECT_EQ(errorOf([&] { doc(nested(kMaxYamlDepth + 1)); }),
+            "/etc/staa/test.yaml:1:" + std::to_string(kMaxYamlDepth + 3) + ": nested too deep: at most 64 levels of lists and mappings");
+}
+
+TEST(ConfigReaderBounds, AliasesExpandingTo8MillionNodesReadAndOneMoreIsRefused) {
+  // a: 1000 nodes expanded; b: 7998 aliases of it; pad: p items. The whole document:
+  // 6 + 7999 * 1000 + p nodes.
+  const auto text = [](std::size_t pad) {
+    std::string t = "a: &a [0";
+    for (int i = 1; i < 999; ++i) t += ",0";
+    t += "]\nb: [*a";
+    for (int i = 1; i < 7998; ++i) t += ",*a";
+    t += "]\npad: [0";
+    for (std::size_t i = 1; i < pad; ++i) t += ",0";
+    return t + "]\n";
+  };
+  const ConfigDocument ok = doc(text(994));
+  EXPECT_EQ(ok.root().get("b").size(), 7998u);
+  EXPECT_EQ(ok.root().get("b")[7997].size(), 999u);
+  EXPECT_EQ(errorOf([&] { doc(text(995)); }), "/etc/staa/test.yaml:1:1: aliases expand the document beyond 8000000 nodes (the bound)");
+}
+
+TEST(ConfigReaderBounds, AnAliasMayOnlyNameACompleteNode) {
+  EXPECT_THAT(errorOf([&] { doc("a: &a [1, *a]\n"); }), HasSubstr("unknown anchor 'a'"));
+  EXPECT_THAT(errorOf([&] { doc("a: *b\n"); }), StartsWith("/etc/staa/test.yaml:1:4: not valid YAML: unknown anchor 'b'"));
+}
+
+TEST(ConfigReaderBounds, TextsAndFilesOf64MiBReadAndOneByteMoreIsRefused) {
+  std::string text = "a: 1\n#";
+  text.resize(kMaxYamlFileBytes, 'x');
+  EXPECT_EQ(doc(text).root().get("a").number(), 1.0);
+  text += 'x';
+  EXPECT_EQ(errorOf([&] { doc(text); }),
+            "/etc/staa/test.yaml: 67108865 bytes, beyond the bound of 67108864 bytes for a YAML file");
+  // A file is measured before it is read (sparse files: no disk space used).
+  const fs::path file = fs::temp_directory_path() / ("staa-bound-" + std::to_string(::getpid()) + ".yaml");
+  { std::ofstream(file) << "a: 1\n"; }
+  fs::resize_file(file, kMaxYamlFileBytes);
+  EXPECT_EQ(ConfigDocument::readFile(file, "map file").size(), kMaxYamlFileBytes);
+  fs::resize_file(file, kMaxYamlFileBytes + 1);
+  EXPECT_EQ(errorOf([&] { ConfigDocument::readFile(file, "map file"); }),
+            file.string() + ": 67108865 bytes, beyond the bound of 67108864 bytes for a map file");
+  fs::remove(file);
+}
+
 }  // namespace
 }  // namespace staa::io

@@ -412,5 +412,51 @@ TEST(PolygonMapFuzz, MutatedAndTruncatedFilesLoadOrFailCleanly) {
   EXPECT_GT(rejected, 100);
 }
 
+
+// ---- input bounds (docs/ARCHITECTURE.md, "Input bounds") ----
+
+// A regular polygon of n vertices on a circle of radius 5.
+Polygon circle(std::size_t n) {
+  Polygon p;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a = 6.283185307179586 * static_cast<double>(k) / static_cast<double>(n);
+    p.push_back({5.0 * std::cos(a), 5.0 * std::sin(a)});
+  }
+  return p;
+}
+
+TEST_F(MapFiles, APolygonOfAMillionVerticesLoadsAndOneMoreIsRefusedNamingTheBound) {
+  PolygonMap map;
+  map.obstacles.push_back(circle(kMaxPolygonVertices));
+  const fs::path file = dir_ / "million.yaml";
+  savePolygonMap(map, file);
+  EXPECT_EQ(loadPolygonMap(file).obstacles.front().size(), kMaxPolygonVertices);
+  // One more vertex, written by hand (savePolygonMap refuses it).
+  std::string text = "format: staa-polygon-map/1\nobstacles:\n  - [";
+  for (std::size_t k = 0; k <= kMaxPolygonVertices; ++k) text += k ? ", [" + std::to_string(k) + ", 0]" : "[0, 1]";
+  text += "]\n";
+  EXPECT_EQ(loadError("million-and-one.yaml", text),
+            path(dir_, "million-and-one.yaml") + ":3: obstacles[0]: has 1000001 points, beyond the bound of 1000000 vertices per polygon");
+  map.obstacles.front().push_back({0.0, 0.0});
+  EXPECT_THROW(savePolygonMap(map, dir_ / "refused.yaml"), MapError);
+}
+
+TEST_F(MapFiles, AHundredThousandPolygonsAndGoalsLoadAndOneMoreIsRefusedNamingTheBound) {
+  const auto text = [](std::size_t polygons, std::size_t goals) {
+    std::string t = "format: staa-polygon-map/1\nobstacles:\n";
+    for (std::size_t i = 0; i < polygons; ++i) t += "  - [[0, 0], [1, 0], [0, 1]]\n";
+    t += "goals:\n";
+    for (std::size_t i = 0; i < goals; ++i) t += "  - [2, 2]\n";
+    return t;
+  };
+  const PolygonMap map = loadPolygonMap(write("inside.yaml", text(kMaxMapPolygons, kMaxMapGoals)));
+  EXPECT_EQ(map.obstacles.size(), kMaxMapPolygons);
+  EXPECT_EQ(map.goals.size(), kMaxMapGoals);
+  EXPECT_EQ(loadError("polygons.yaml", text(kMaxMapPolygons + 1, 1)),
+            path(dir_, "polygons.yaml") + ":3: obstacles: has 100001 polygons, beyond the bound of 100000 per map");
+  EXPECT_EQ(loadError("goals.yaml", text(1, kMaxMapGoals + 1)),
+            path(dir_, "goals.yaml") + ":5: goals: has 100001 goals, beyond the bound of 100000 per map");
+}
+
 }  // namespace
 }  // namespace staa

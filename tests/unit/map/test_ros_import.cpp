@@ -496,5 +496,33 @@ TEST(RosImportRealMaps, Tb3SandboxKeepsItsArenaFreeAndItsUnknownSurroundBlocked)
   EXPECT_TRUE(blockedAt(r.map, cellCentre(r.grid, 10, 370)));
 }
 
+
+// ---- input bounds (docs/ARCHITECTURE.md, "Input bounds") ----
+
+TEST(RosImportBounds, ASideOf65536PixelsReadsAnd65537IsRefusedNamingTheBound) {
+  const PgmImage wide = parsePgm("P5\n65536 1\n255\n" + std::string(65536, '\x10'), "wide.pgm");
+  EXPECT_EQ(wide.width, 65536);
+  EXPECT_EQ(errorOf([] { parsePgm("P5\n65537 1\n255\n" + std::string(65537, '\x10'), "wider.pgm"); }),
+            "wider.pgm: malformed PGM: width 65537 out of range [1, 65536]");
+  EXPECT_EQ(errorOf([] { parsePgm("P5\n1 65537\n255\n", "taller.pgm"); }), "taller.pgm: malformed PGM: height 65537 out of range [1, 65536]");
+}
+
+TEST(RosImportBounds, AnImageMustFitInTheFilesRealSize) {
+  // 100,000 x 100,000 pixels claimed by a file of a few bytes: refused before any allocation.
+  EXPECT_THAT(errorOf([] { parsePgm("P5\n65536 65536\n255\n\x01\x02", "huge.pgm"); }),
+              HasSubstr("need 4294967296 bytes of pixel data, found 2"));
+  EXPECT_EQ(parsePgm("P5\n2 2\n255\n\x01\x02\x03\x04", "exact.pgm").pixels.size(), 4u);
+}
+
+TEST(RosImportBounds, AFileOf256MiBIsReadAndOneByteMoreIsRefusedNamingTheBound) {
+  TempDir dir;
+  // Sparse files: no disk space used. Just inside, the bytes are read and judged as a PGM.
+  const auto file = dir.write("big.pgm", "P5\n1 1\n255\n\x01");
+  std::filesystem::resize_file(file, kMaxPgmFileBytes);
+  EXPECT_EQ(loadPgm(file).width, 1);
+  std::filesystem::resize_file(file, kMaxPgmFileBytes + 1);
+  EXPECT_EQ(errorOf([&] { loadPgm(file); }), file.string() + ": 268435457 bytes, beyond the bound of 268435456 bytes for a PGM image");
+}
+
 }  // namespace
 }  // namespace staa

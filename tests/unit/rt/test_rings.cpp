@@ -1,3 +1,4 @@
+#include "rt/byte_ring.hpp"
 #include "rt/log_ring.hpp"
 #include "rt/seqlock.hpp"
 #include "rt/spsc_ring.hpp"
@@ -9,9 +10,60 @@
 #include <cstdint>
 #include <cstring>
 #include <thread>
+#include <vector>
 
 namespace staa::rt {
 namespace {
+
+std::vector<std::byte> record(std::size_t n, std::uint8_t fill) { return std::vector<std::byte>(n, std::byte{fill}); }
+
+TEST(ByteRing, KeepsRecordsWholeAndInOrderAcrossTheWrapAndDropsWhatDoesNotFit) {
+  ByteRing ring(256);  // a power of two already
+  EXPECT_EQ(ring.capacity(), 256u);
+  EXPECT_EQ(ring.maxRecord(), 124u);
+  std::vector<std::byte> out;
+  EXPECT_FALSE(ring.pop(out));
+  // 100-byte records take 104 bytes each: two fit, the third waits for room.
+  ASSERT_TRUE(ring.push(record(100, 1)));
+  ASSERT_TRUE(ring.push(record(100, 2)));
+  EXPECT_FALSE(ring.push(record(100, 3)));
+  EXPECT_EQ(ring.dropped(), 1u);
+  ASSERT_TRUE(ring.pop(out));
+  EXPECT_EQ(out, record(100, 1));
+  // The next one does not fit before the end (48 bytes left there): it starts at the front.
+  ASSERT_TRUE(ring.push(record(100, 4)));
+  ASSERT_TRUE(ring.pop(out));
+  EXPECT_EQ(out, record(100, 2));
+  ASSERT_TRUE(ring.pop(out));
+  EXPECT_EQ(out, record(100, 4));
+  EXPECT_FALSE(ring.pop(out));
+  EXPECT_FALSE(ring.push(record(125, 5))) << "longer than half the ring: never";
+  ASSERT_TRUE(ring.push(record(0, 0)));
+  ASSERT_TRUE(ring.pop(out));
+  EXPECT_TRUE(out.empty());
+}
+
+TEST(ByteRing, TwoThreadsOfVaryingRecordsLoseNothingWhenTheProducerRetries) {
+  ByteRing ring(4096);
+  constexpr int kRecords = 200000;
+  std::thread producer([&] {
+    std::vector<std::byte> r;
+    for (int i = 0; i < kRecords; ++i) {
+      r.assign(static_cast<std::size_t>(i % 300), std::byte{static_cast<std::uint8_t>(i)});
+      while (!ring.push(r)) std::this_thread::yield();
+    }
+  });
+  std::vector<std::byte> out;
+  for (int i = 0; i < kRecords; ++i) {
+    while (!ring.pop(out)) std::this_thread::yield();
+    ASSERT_EQ(out.size(), static_cast<std::size_t>(i % 300));
+    if (!out.empty()) {
+      ASSERT_EQ(out.back(), std::byte{static_cast<std::uint8_t>(i)});
+    }
+  }
+  producer.join();
+  EXPECT_FALSE(ring.pop(out));
+}
 
 TEST(SpscRing, PushesAndPopsInOrderAndCountsDropsWhenFull) {
   SpscRing<int, 4> ring;

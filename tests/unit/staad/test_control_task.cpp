@@ -12,9 +12,11 @@
 #include "geometry/polygon.hpp"
 #include "hal/mock/mock_hal.hpp"
 #include "map/polygon_map.hpp"
+#include "record/replay.hpp"
 #include "rt/alloc_count.hpp"
 
 #include "shared_dir.hpp"
+#include "temp_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -58,9 +60,10 @@ const Pose2 kGoal2{7.0, 4.0, 3.14};
 
 class Lockstep {
  public:
-  explicit Lockstep(const DaemonConfig& c, const Pose2& start = kStart)
+  // recorder_bytes: the flight recorder's ring (0: off).
+  explicit Lockstep(const DaemonConfig& c, const Pose2& start = kStart, std::size_t recorder_bytes = 0)
       : config(c),
-        ch(1024),
+        ch(1024, recorder_bytes),
         base(c.robot, start),
         task(c, ch, clock),
         base_task(base, ch, task.period()),
@@ -564,6 +567,65 @@ TEST(ControlTask, ThousandCyclesWithGoalChangesAndAStopAllocateNothing) {
   EXPECT_EQ(allocations, 0u);
   EXPECT_GT(reached, 0);
   EXPECT_EQ(ls.task.cycles(), 1005u);
+}
+
+// With the flight recorder on, the cycles (goal changes, a stop, a pose correction) encode
+// into the ring without allocating, and what they recorded replays bit for bit.
+TEST(ControlTask, TheFlightRecorderAllocatesNothingAndItsCyclesReplayBitForBit) {
+  ASSERT_TRUE(rt::hookInstalled());
+  const DaemonConfig config = officeConfig(100);
+  Lockstep ls(config, kStart, 16u << 20);
+  ASSERT_TRUE(ls.ch.recorder);
+  ls.request(RequestKind::kGoal, kGoal);
+  ls.steps(5);
+  rt::resetRealtimeAllocations();
+  rt::markRealtimeThread(true);
+  for (int k = 0; k < 600; ++k) {
+    if (k == 150) ls.request(RequestKind::kGoal, kGoal2, 2);
+    if (k == 300) ls.request(RequestKind::kStop);
+    if (k == 350) ls.request(RequestKind::kGoal, kGoal, 3);
+    if (k == 450) ls.request(RequestKind::kPose, Pose2{5.0, 4.5, 0.0});
+    ls.step();
+  }
+  rt::markRealtimeThread(false);
+  EXPECT_EQ(rt::realtimeAllocations(), 0u);
+  EXPECT_EQ(ls.ch.recorder->dropped(), 0u);
+
+  // The service's half: the records into a file, read back and rerun.
+  record::Session session;
+  session.source = "staad";
+  session.control = ls.task.controlCycle().config();
+  session.robot = config.robot;
+  session.map = config.map;
+  session.agents = {{0, "staa"}};
+  const std::filesystem::path file = test::freshDir("ControlTask", "recorder") / "run.mcap";
+  std::uint64_t records = 0;
+  {
+    record::RecordingFile out(file, session);
+    std::vector<std::byte> r;
+    while (ls.ch.recorder->pop(r)) {
+      out.add(r);
+      ++records;
+    }
+    out.close();
+    ASSERT_TRUE(out.ok()) << out.error();
+  }
+  EXPECT_EQ(records, ls.task.cycles());
+  const record::Recording recording = record::loadRecording(file);
+  const std::vector<record::CycleRecord>& cycles = recording.agents.at(0);
+  const auto stopped = std::count_if(cycles.begin(), cycles.end(),
+                                     [](const record::CycleRecord& c) { return c.step == record::StepKind::kStopped; });
+  EXPECT_EQ(stopped, 50) << "the stop held the robot for 50 cycles without a step";
+  const auto goals = std::count_if(cycles.begin(), cycles.end(),
+                                   [](const record::CycleRecord& c) { return (c.flags & record::kGoalSet) != 0; });
+  EXPECT_EQ(goals, 4) << "three goals and the stop's clearing";
+  const auto corrections = std::count_if(cycles.begin(), cycles.end(), [](const record::CycleRecord& c) {
+    return (c.flags & record::kPoseCorrected) != 0;
+  });
+  EXPECT_EQ(corrections, 1) << "the pose correction is in the cycle after it";
+  const record::ReplayResult replayed = record::replay(recording, {});
+  EXPECT_EQ(replayed.cycles, records);
+  EXPECT_EQ(replayed.identical, records) << replayed.agents[0].first_difference;
 }
 
 // A map from ROS swapped in while driving: the control thread takes the bundle at a cycle

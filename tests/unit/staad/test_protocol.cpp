@@ -88,7 +88,7 @@ TEST(Protocol, MalformedRequestsAreRejectedWithTheFieldAndValue) {
       {"42", {"expected a JSON object", "a number"}},
       {R"("goal")", {"expected a JSON object", "a string"}},
       {R"({"cmd":5})", {"\"cmd\"", "expected a string", "got 5"}},
-      {R"({"cmd":"fly"})", {"\"cmd\"", "unknown command \"fly\"", "goal, pose, stop, status or histograms"}},
+      {R"({"cmd":"fly"})", {"\"cmd\"", "unknown command \"fly\"", "goal, pose, stop, status, histograms or record"}},
       {R"({"x":1,"y":2})", {"\"cmd\": missing"}},
       {R"({"cmd":"goal","x":1})", {"\"y\": missing", "goal needs x and y"}},
       {R"({"cmd":"pose","y":1})", {"\"x\": missing", "pose"}},
@@ -384,6 +384,23 @@ TEST(Protocol, HistogramsIsACommandWithoutParameters) {
   EXPECT_STREQ(toString(RequestKind::kHistograms), "histograms");
 }
 
+TEST(Protocol, RecordSavesToAnAbsolutePathAndReadsBackFromItsLine) {
+  const Request r = parsedOk(R"({"cmd": "record", "save": "/var/log/staad/why.mcap"})");
+  EXPECT_EQ(r.kind, RequestKind::kRecord);
+  EXPECT_STREQ(r.file.data(), "/var/log/staad/why.mcap");
+  EXPECT_EQ(requestLine(r), "{\"cmd\":\"record\",\"save\":\"/var/log/staad/why.mcap\"}\n");
+  EXPECT_STREQ(parsedOk(requestLine(r)).file.data(), r.file.data());
+  EXPECT_THAT(parsedError(R"({"cmd": "record"})"), HasSubstr("\"save\": missing"));
+  EXPECT_THAT(parsedError(R"({"cmd": "record", "save": "why.mcap"})"),
+              HasSubstr("\"save\": expected an absolute path, got \"why.mcap\""));
+  EXPECT_THAT(parsedError(R"({"cmd": "record", "save": 3})"), HasSubstr("\"save\": expected a file path, got 3"));
+  EXPECT_THAT(parsedError(R"({"cmd": "record", "save": "/a", "seconds": 3})"),
+              HasSubstr("unknown key \"seconds\" for record (expected cmd, save)"));
+  EXPECT_THAT(parsedError("{\"cmd\": \"record\", \"save\": \"/" + std::string(600, 'a') + "\"}"),
+              HasSubstr("a path of at most 511 bytes"));
+  EXPECT_STREQ(toString(RequestKind::kRecord), "record");
+}
+
 TEST(Protocol, AHistogramIsItsNonEmptyBinsWithCountOverflowAndMax) {
   rt::LatencyHistogram h(100);  // 1 us bins up to 100 us
   h.record(1'500);              // bin 1
@@ -426,6 +443,26 @@ TEST(Protocol, StatusNamesStallsAndThePlannersBoundBesideTheOtherCauses) {
   EXPECT_DOUBLE_EQ(j["planner"]["local_max_us"].get<double>(), 300.0);
   s.budget_ms = 0.0;  // an expansion budget
   EXPECT_TRUE(statusJson(s, 0)["planner"]["budget_ms"].is_null());
+}
+
+
+TEST(Protocol, RequestsNestedEightLevelsParseAndNineAreRefusedNamingTheBound) {
+  const auto nested = [](std::size_t levels) {
+    return R"({"cmd":"status","x":)" + std::string(levels - 1, '[') + "1" + std::string(levels - 1, ']') + "}";
+  };
+  // Eight levels reach the request's own checks (an unknown key), nine stop before parsing.
+  EXPECT_THAT(parsedError(nested(kMaxRequestDepth)), HasSubstr("unknown key \"x\""));
+  EXPECT_EQ(parsedError(nested(kMaxRequestDepth + 1)), "nested too deep: at most 8 levels of objects and arrays");
+  // Brackets inside strings are text, not nesting.
+  EXPECT_THAT(parsedError(R"({"cmd":"[[[[[[[[[[{{{{{{{{{{"})"), HasSubstr("unknown command"));
+}
+
+TEST(Protocol, ARequestOf4096BytesIsReadAnd4097AreRefusedNamingTheBound) {
+  const std::string body = R"({"cmd":"status"})";
+  const std::string inside = std::string(kMaxRequestBytes - body.size(), ' ') + body;
+  ASSERT_EQ(inside.size(), kMaxRequestBytes);
+  EXPECT_TRUE(std::holds_alternative<Request>(parseRequest(inside)));
+  EXPECT_EQ(parsedError(" " + inside), "request too long: 4097 bytes (at most 4096)");
 }
 
 }  // namespace

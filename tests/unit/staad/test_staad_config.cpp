@@ -172,6 +172,15 @@ TEST(ShippedConfig, LoadsWithTheDocumentedValues) {
   EXPECT_DOUBLE_EQ(c.control.rate_hz, 30.0);
   EXPECT_DOUBLE_EQ(c.control.goal_tolerance_m, 0.2);
   EXPECT_DOUBLE_EQ(c.control.goal_heading_tolerance, 0.4);
+  EXPECT_TRUE(c.recorder.enabled);
+  EXPECT_DOUBLE_EQ(c.recorder.seconds, 30.0);
+  EXPECT_TRUE(c.recorder.path.empty());
+  EXPECT_EQ(c.recorder.max_file_mb, 64u);
+  EXPECT_EQ(c.recorder.max_files, 8u);
+  EXPECT_TRUE(c.recorder.fault_dir.empty());
+  EXPECT_DOUBLE_EQ(c.recorder.fault_after_s, 2.0);
+  EXPECT_EQ(c.recorder.ring_kb, 4096u);
+  EXPECT_NE(c.text.find("format: staad-config/1"), std::string::npos) << "the recordings keep the file's text";
 }
 
 TEST_F(ConfigFiles, ReadsEveryKeyOfAValidConfig) {
@@ -307,6 +316,36 @@ TEST_F(ConfigFiles, SocketClientLimitAndIdleTimeoutAreRead) {
       loadDaemonConfig(write("edges.yaml", edited("mode: \"0660\"", "mode: \"0660\"\n  max_clients: 256\n  idle_timeout_s: 3600")));
   EXPECT_EQ(edges.socket_max_clients, 256u);
   EXPECT_DOUBLE_EQ(edges.socket_idle_timeout_s, 3600.0);
+}
+
+// The flight recorder's keys: paths relative to the file, every number range-checked with
+// the file, the line and the key.
+TEST_F(ConfigFiles, RecorderKeysAreReadAndEveryBadOneIsNamedWithItsLine) {
+  const std::string section = "recorder: {enabled: true, seconds: 12, path: rec/staad.mcap, max_file_mb: 2, max_files: 3, "
+                              "fault_dir: faults, fault_after_s: 0.5, ring_kb: 1024}\n";
+  const DaemonConfig c = loadDaemonConfig(write("staad.yaml", kValid + section));
+  EXPECT_DOUBLE_EQ(c.recorder.seconds, 12.0);
+  EXPECT_EQ(c.recorder.path, (dir_ / "rec/staad.mcap").lexically_normal());
+  EXPECT_EQ(c.recorder.fault_dir, (dir_ / "faults").lexically_normal());
+  EXPECT_EQ(c.recorder.max_file_mb, 2u);
+  EXPECT_EQ(c.recorder.max_files, 3u);
+  EXPECT_DOUBLE_EQ(c.recorder.fault_after_s, 0.5);
+  EXPECT_EQ(c.recorder.ring_kb, 1024u);
+  const DaemonConfig off = loadDaemonConfig(write("off.yaml", kValid + "recorder: {enabled: false, path: \"\"}\n"));
+  EXPECT_FALSE(off.recorder.enabled);
+  EXPECT_TRUE(off.recorder.path.empty());
+  const int line = static_cast<int>(std::count(kValid.begin(), kValid.end(), '\n')) + 1;
+  for (const auto& [bad, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"recorder: {seconds: 0}", "recorder.seconds: must be in [1, 3600] s, got 0"},
+           {"recorder: {ring_kb: 64}", "recorder.ring_kb: must be an integer in 256..262144 (the ring between the control and service threads), got 64"},
+           {"recorder: {max_files: 0}", "recorder.max_files: must be an integer in 1..10000, got 0"},
+           {"recorder: {fault_after_s: -1}", "recorder.fault_after_s: must be in [0, 60] s, got -1"},
+           {"recorder: {enabled: sometimes}", "recorder.enabled"},
+           {"recorder: {fault_dri: x}", "recorder.fault_dri: unknown key (expected enabled, seconds, path, max_file_mb, max_files, fault_dir, fault_after_s, ring_kb)"}}) {
+    const std::string error = loadError(kValid + bad + "\n");
+    EXPECT_THAT(error, HasSubstr(expected)) << bad;
+    EXPECT_THAT(error, HasSubstr("staad.yaml:" + std::to_string(line) + ": ")) << error;
+  }
 }
 
 TEST_F(ConfigFiles, ExpansionBudgetReplacesTheWallClock) {
