@@ -19,9 +19,11 @@ const char* toString(CycleState state) {
   return "unknown";
 }
 
-GlobalPathOptions ControlCycle::pathOptions(const ControlConfig& config, double inflation) {
+GlobalPathOptions ControlCycle::pathOptions(const ControlConfig& config, const RobotProfile& robot, double inflation) {
   GlobalPathOptions o = config.path;
   o.inflation_radius_m = inflation;
+  // At most the growth of M': a round robot's passage map would be M' itself (none is built).
+  o.passage_inflation_m = config.passages ? std::min(robot.passageRadius(config.passage_margin_m), inflation) : 0.0;
   o.search.max_dynamic_polygons = config.max_moving_obstacles;
   o.search.max_dynamic_vertices = config.max_moving_obstacles * FixedPolygon::kCapacity;
   return o;
@@ -60,7 +62,7 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
       inflation_(inflationFor(config, robot)),
       dynamic_inflation_(dynamicInflationFor(config, robot)),
       local_inflation_(config.local_inflation_m > 0.0 ? config.local_inflation_m : dynamic_inflation_),
-      path_(map, pathOptions(config, inflation_)),
+      path_(map, pathOptions(config, robot, inflation_)),
       local_obstacles_(inflateEachToSimple(path_.realObstacles(), local_inflation_ + config.path.arc_tolerance_m,
                                            config.path.arc_tolerance_m)),
       local_(config.local),
@@ -72,6 +74,24 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
       inflated_(config.max_moving_obstacles),
       views_(config.max_moving_obstacles) {
   held_path_.reserve(kHeldPathCapacity);
+  if (path_.hasPassageMap()) {
+    local_obstacle_set_.assign(std::span<const Polygon>(local_obstacles_), PolygonSet::Options{config.path.search.grid_cell_m});
+    staa_.planner().heuristic().setPassageObstacles(path_.passageObstacles(), path_.options().passage_inflation_m);
+  }
+}
+
+bool ControlCycle::routeNeedsPassage(std::span<const Vec2> route) const {
+  if (route.empty()) return false;
+  const IntermediateGoal& g = local_.intermediateGoal();
+  const std::size_t last = std::min(g.segment, route.size() - 1);
+  // The route from the robot up to G~ (G~ lies on segment `last`); a point inside L (the
+  // robot close to a wall) counts as closed: the segment test needs free ends.
+  for (std::size_t i = 0; i <= last; ++i) {
+    const Vec2& a = route[i];
+    const Vec2 b = i == last || i + 1 >= route.size() ? g.pose.position() : route[i + 1];
+    if (local_obstacle_set_.pointBlocked(a) || local_obstacle_set_.segmentBlocked(a, b)) return true;
+  }
+  return local_obstacle_set_.pointBlocked(g.pose.position());
 }
 
 void ControlCycle::setGoal(const Pose2& goal) {
@@ -86,12 +106,28 @@ void ControlCycle::setGoal(const Pose2& goal) {
   ++goal_changes_;
 }
 
+ControlCycle::Memory ControlCycle::memory() const {
+  Memory m{goal_, state_, held_valid_, path_misses_, held_path_};
+  m.held_passage = held_passage_;
+  const GlobalPathPlanner::RouteChoice route = path_.routeChoice();
+  // The choice is for the goal the cycle drives to: a choice for another is none.
+  m.route_chosen = route.chosen && goal_.has_value() && route.goal == goal_->position();
+  m.route_in_passage = m.route_chosen && route.in_passage;
+  return m;
+}
+
 void ControlCycle::restoreMemory(const Memory& memory) {
   goal_ = memory.goal;
   state_ = memory.state;
   path_misses_ = memory.path_misses;
   held_valid_ = memory.held_valid && memory.held_path.size() <= held_path_.capacity();
   if (held_valid_) held_path_.assign(memory.held_path.begin(), memory.held_path.end());
+  held_passage_ = memory.held_passage;
+  GlobalPathPlanner::RouteChoice route;
+  route.chosen = memory.route_chosen && goal_.has_value();
+  route.in_passage = route.chosen && memory.route_in_passage;
+  if (route.chosen) route.goal = goal_->position();
+  path_.restoreRouteChoice(route);
 }
 
 void ControlCycle::clearGoal() {
@@ -187,11 +223,13 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   out.path_status = path.status;
   out.path_dynamic = path.dynamic;
   out.path_length = path.length;
+  out.path_passage = path.passage;
   std::span<const Vec2> route = path.path;
   if (path.status == PathStatus::kFound) {
     path_misses_ = 0;
     held_valid_ = path.path.size() <= held_path_.capacity();
     if (held_valid_) held_path_.assign(path.path.begin(), path.path.end());  // within capacity: no allocation
+    held_passage_ = path.passage;
   } else {
     ++path_misses_;
     const double period = 1.0 / config_.rate_hz;
@@ -200,6 +238,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
     if (hold) {
       route = held_path_;
       out.path_held = true;
+      out.path_passage = held_passage_;
     } else if (path.status == PathStatus::kAborted) {
       // Out of time on a cold query with nothing to hold: stop for now, the search resumes
       // where it stopped next cycle.
@@ -219,7 +258,18 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
 
   // 2. Local map and the intermediate goal.
   t0 = clock_();
-  local_.update(robot.pose(), path_.realObstacleSet(), route, goal.theta);
+  // G~ counts a later piece of the path as reached through the box where the local paths can
+  // get there: as far from C as their own obstacles (L, or M'' for a route through it).
+  const double reach_clearance = out.path_passage ? path_.options().passage_inflation_m : local_inflation_;
+  local_.update(robot.pose(), path_.realObstacleSet(), route, goal.theta, reach_clearance);
+  // Through a passage only M'' leaves open, the local paths plan in M'' (they follow the
+  // route) and the static collision checks are decided exactly where the grid rejects a pose.
+  if (path_.hasPassageMap()) {
+    const bool passage = out.path_passage && routeNeedsPassage(route);
+    staa_.planner().heuristic().usePassageObstacles(passage);
+    local_.setExactStatic(passage);
+    out.passage_mode = passage;
+  }
   out.local_ns = clock_() - t0;
 
   // 3. The local controller (STAA* unless a baseline replaced it), and 4. its command for

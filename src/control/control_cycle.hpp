@@ -58,6 +58,15 @@ struct ControlConfig {
   // local paths only guide a search whose collisions are checked on the real footprint, and
   // with the circumradius they could not pass a person in a 2 m corridor at all.
   double local_inflation_m = 0.0;
+  // Passages narrower than M' (issue 16): the route may also run in the passage map M'',
+  // grown by the footprint's inscribed radius plus this margin (GlobalPathOptions:
+  // passage_inflation_m; the band's cost and hysteresis are in `path`), so a goal behind a
+  // door M' closes but the footprint fits through lengthwise is reached, and a goal is
+  // unreachable only where no passage is wider than the footprint (kNoPassage). A round robot
+  // (inscribed radius + margin >= circumradius: the HSR) plans in M' alone, as before.
+  // Off (false): M' alone for every robot.
+  bool passages = true;
+  double passage_margin_m = RobotProfile::kDefaultPassageMargin;
   StaaConfig staa;
   LocalMapConfig local;
   GlobalPathOptions path;
@@ -84,6 +93,10 @@ struct CycleOutput {
   PathStatus path_status = PathStatus::kNoPath;
   bool path_dynamic = false;
   bool path_held = false;  // the query failed (path_status says why): the last path was followed
+  bool path_passage = false;  // the route runs in the passage map M'' (GlobalPath::passage)
+  // ... and up to G~ where the local paths' obstacles L are closed: the heuristic plans in
+  // M'' and the static collisions are decided exactly this cycle.
+  bool passage_mode = false;
   double path_length = 0.0;
   PlanResult plan;       // the search's result when the local controller searched (STAA*)
   bool planned = false;  // false when no search ran (idle, reached, unreachable, a baseline)
@@ -104,8 +117,9 @@ class ControlCycle {
 
   CycleOutput step(const CycleInputs& inputs, PlannerBudget budget);
 
-  // What a step carries to the next besides the searches' trees: the goal, the state and the
-  // path held through failed queries. The flight recorder records it every cycle; a replay
+  // What a step carries to the next besides the searches' trees: the goal, the state, the
+  // path held through failed queries (and whether it ran in the passage map), and the global
+  // path's choice between M' and M'' for the goal (its hysteresis). The flight recorder records it every cycle; a replay
   // from the middle of a recording restores it. The trees (the global path's and the
   // heuristic's Minimal Construct searches) are forgotten by setGoal: from a cycle with
   // searchesFresh() a replay repeats the work, and with it the deadline's cut, exactly.
@@ -115,8 +129,11 @@ class ControlCycle {
     bool held_valid = false;
     int path_misses = 0;
     std::span<const Vec2> held_path;  // valid until the next step
+    bool held_passage = false;        // the held path runs in M''
+    bool route_chosen = false;        // a route was chosen for the goal (GlobalPathPlanner::RouteChoice)
+    bool route_in_passage = false;    // ... in M''
   };
-  Memory memory() const { return {goal_, state_, held_valid_, path_misses_, held_path_}; }
+  Memory memory() const;
   // A recorded memory back in place (replay only: a held path beyond the reserved capacity
   // is not held). The searches are left as they are.
   void restoreMemory(const Memory& memory);
@@ -147,7 +164,10 @@ class ControlCycle {
   // local map, or the brake at the limits.
   CycleOutput safeStop(const UnicycleState& robot, const DynamicObstacleSet& obstacles, const Pose2& goal,
                        CycleState state);
-  static GlobalPathOptions pathOptions(const ControlConfig& config, double inflation);
+  static GlobalPathOptions pathOptions(const ControlConfig& config, const RobotProfile& robot, double inflation);
+  // Whether the route up to G~ runs where the local paths' own obstacles L are closed (a
+  // passage of M''): then the heuristic plans its local paths in M'' this cycle.
+  bool routeNeedsPassage(std::span<const Vec2> route) const;
   // The command clamped to the robot's limits.
   CycleOutput command(const LocalCommand& cmd, CycleState state) const;
   LocalContext context(const UnicycleState& robot, std::span<const Vec2> route,
@@ -160,6 +180,7 @@ class ControlCycle {
   double local_inflation_;
   GlobalPathPlanner path_;
   std::vector<Polygon> local_obstacles_;  // L: the real obstacles grown by local_inflation_
+  PolygonSet local_obstacle_set_;         // L, indexed (only with a passage map)
   LocalMap local_;
   StaaController staa_;
   LocalController* controller_;  // &staa_ or a baseline
@@ -174,6 +195,7 @@ class ControlCycle {
   // path is not held), and how many cycles in a row the query has failed.
   std::vector<Vec2> held_path_;
   bool held_valid_ = false;
+  bool held_passage_ = false;
   int path_misses_ = 0;
   bool searches_fresh_ = true;
   std::uint64_t goal_changes_ = 0;

@@ -429,6 +429,7 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   s["jobs"] = spec.jobs;
   s["robot"] = spec.robot.name;
   s["predict_turning"] = spec.control.staa.predict_turning;
+  s["lazy_heuristic"] = spec.control.staa.lazy_heuristic;
   doc["spec"] = std::move(s);
   return doc.dump(2) + "\n";
 }

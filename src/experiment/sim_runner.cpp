@@ -142,6 +142,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     }
     if (options.on_cycle) options.on_cycle(world, out, k);
     result.final_state = toString(out.state);
+    result.reason = out.state == CycleState::kUnreachable ? toString(out.path_status) : "";
     if (out.state == CycleState::kReached) {
       result.reached_goal = true;
       result.goals_reached = 1;

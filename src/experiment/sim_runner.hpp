@@ -52,6 +52,7 @@ struct SimResult {
   double min_clearance_m = 0.0;
   double duration_s = 0.0;       // simulated time
   std::string final_state;       // the cycle's state at the end
+  std::string reason;            // why, when that state is unreachable (the path's status)
   Pose2 final_pose;
   // Planner statistics over the cycles that ran STAA*.
   int calls = 0;

@@ -2,6 +2,7 @@
 
 #include "geometry/clipper_convert.hpp"
 #include "geometry/polygon.hpp"
+#include "geometry/simplify.hpp"
 
 #include <clipper.hpp>
 
@@ -139,7 +140,16 @@ double unionArea(const std::vector<Polygon>& polygons) {
 
 std::vector<PolygonWithHoles> inflatePolygons(const std::vector<Polygon>& polygons, double radius,
                                               double arc_tolerance) {
-  cl::Paths paths = toPaths(polygons);
+  cl::Paths paths;
+  paths.reserve(polygons.size());
+  for (const Polygon& p : polygons) {
+    // A big polygon is simplified outwards first (geometry/simplify.hpp): Clipper's offset
+    // and the path search grow faster than linearly in its vertices. (Not before shrinking:
+    // outwards is not the safe side there.) Only a big one is copied: a normal map's
+    // polygons allocate as before.
+    if (p.size() < 3) continue;
+    paths.push_back(radius >= 0.0 && isBigPolygon(p) ? toPath(simplifyIfBig(p)) : toPath(p));
+  }
   for (cl::Path& p : paths) {
     if (!cl::Orientation(p)) cl::ReversePath(p);
   }

@@ -25,7 +25,10 @@ double unionArea(const std::vector<Polygon>& polygons);
 
 // The union of the polygons grown by `radius` metres (round corners whose chords stay within
 // `arc_tolerance` of the true arc). A negative radius shrinks. Outer boundaries only grow, so
-// a room whose door is narrower than 2 * radius becomes a hole.
+// a room whose door is narrower than 2 * radius becomes a hole. Growing (radius >= 0), a
+// polygon of more than kSimplifyAboveVertices (1,000) vertices is first replaced by its
+// outward simplification within kSimplifyTolerance_m (2 cm; geometry/simplify.hpp): the
+// result then contains the polygon grown by the radius and lies within the radius plus 2 cm.
 std::vector<PolygonWithHoles> inflatePolygons(const std::vector<Polygon>& polygons, double radius,
                                               double arc_tolerance = 0.01);
 

@@ -63,9 +63,61 @@ double headingOf(const Vec2& a, const Vec2& b) { return std::atan2(b.y() - a.y()
 
 }  // namespace
 
-// ---- G~ (paper, Sec. III-C) ----
+// ---- G~ (paper, Sec. III-C; issue 16) ----
 
-IntermediateGoal findIntermediateGoal(std::span<const Vec2, 4> box_ccw, std::span<const Vec2> path, double goal_theta) {
+std::size_t pathPiecesInBox(std::span<const Vec2, 4> box_ccw, std::span<const Vec2> path, std::span<PathPiece> out) {
+  const std::size_t n = path.size();
+  if (n == 0 || out.empty()) return 0;
+  std::size_t count = 0;
+  PathPiece piece;
+  // The first piece starts at the path's start, or, should that lie outside the box (a stale
+  // path), where the path first enters the box.
+  auto enterFrom = [&](std::size_t s0, PathPiece& p) {
+    for (std::size_t s = s0; s + 1 < n; ++s) {
+      double t0 = 0.0, t1 = 1.0;
+      if (clipToConvex(box_ccw, path[s], path[s + 1], t0, t1)) {
+        p.first = s;
+        p.in = path[s] + t0 * (path[s + 1] - path[s]);
+        return true;
+      }
+    }
+    return false;
+  };
+  if (insideConvex(box_ccw, path[0])) {
+    piece.first = 0;
+    piece.in = path[0];
+  } else if (!enterFrom(0, piece)) {
+    return 0;
+  }
+  std::size_t s = piece.first;
+  while (s + 1 < n) {
+    const Vec2 a = s == piece.first ? piece.in : path[s];
+    const Vec2& b = path[s + 1];
+    if (insideConvex(box_ccw, b)) {  // both ends inside: the convex box holds the segment
+      ++s;
+      continue;
+    }
+    double t0 = 0.0, t1 = 0.0;
+    const double t = clipToConvex(box_ccw, a, b, t0, t1) ? t1 : 0.0;
+    piece.out = a + t * (b - a);
+    piece.heading = headingOf(a, b);
+    piece.last = s;
+    piece.ends_path = false;
+    out[count++] = piece;
+    // The next piece: where the path enters the box again (a segment meets a convex box in one
+    // interval, so not on this one).
+    if (count == out.size() || !enterFrom(s + 1, piece)) return count;
+    s = piece.first;
+  }
+  piece.out = path[n - 1];
+  piece.last = n >= 2 ? n - 2 : 0;
+  piece.ends_path = true;
+  out[count++] = piece;
+  return count;
+}
+
+IntermediateGoal intermediateGoalOf(std::span<const PathPiece> pieces, std::span<const bool> reached,
+                                    std::span<const Vec2> path, double goal_theta) {
   IntermediateGoal g;
   if (path.empty()) {
     g.pose.theta = goal_theta;
@@ -73,42 +125,31 @@ IntermediateGoal findIntermediateGoal(std::span<const Vec2, 4> box_ccw, std::spa
     return g;
   }
   const std::size_t n = path.size();
-  // The walk starts at the path's start, or, should that lie outside the box (a stale path),
-  // where the path first enters the box.
-  std::size_t first = 0;
-  Vec2 from = path[0];
-  if (!insideConvex(box_ccw, path[0])) {
-    bool enters = false;
-    for (std::size_t s = 0; s + 1 < n && !enters; ++s) {
-      double t0 = 0.0, t1 = 1.0;
-      if (clipToConvex(box_ccw, path[s], path[s + 1], t0, t1)) {
-        first = s;
-        from = path[s] + t0 * (path[s + 1] - path[s]);
-        enters = true;
-      }
-    }
-    if (!enters) {
-      // The path never touches the box: aim at its start (the caller should replan).
-      g.pose = {path[0].x(), path[0].y(), n > 1 ? headingOf(path[0], path[1]) : goal_theta};
-      g.is_final = n == 1;
-      return g;
-    }
-  }
-  for (std::size_t s = first; s + 1 < n; ++s) {
-    const Vec2 a = s == first ? from : path[s];
-    const Vec2& b = path[s + 1];
-    if (insideConvex(box_ccw, b)) continue;  // both ends inside: the convex box holds the segment
-    double t0 = 0.0, t1 = 0.0;
-    const double t = clipToConvex(box_ccw, a, b, t0, t1) ? t1 : 0.0;
-    const Vec2 exit = a + t * (b - a);
-    g.pose = {exit.x(), exit.y(), headingOf(a, b)};
-    g.segment = s;
+  if (pieces.empty()) {
+    // The path never touches the box: aim at its start (the caller should replan).
+    g.pose = {path[0].x(), path[0].y(), n > 1 ? headingOf(path[0], path[1]) : goal_theta};
+    g.is_final = n == 1;
     return g;
   }
-  g.pose = {path[n - 1].x(), path[n - 1].y(), goal_theta};
-  g.is_final = true;
-  g.segment = n >= 2 ? n - 2 : 0;
+  std::size_t k = pieces.size() - 1;
+  while (k > 0 && !(k < reached.size() && reached[k])) --k;
+  const PathPiece& p = pieces[k];
+  if (p.ends_path) {
+    g.pose = {p.out.x(), p.out.y(), goal_theta};
+    g.is_final = true;
+  } else {
+    g.pose = {p.out.x(), p.out.y(), p.heading};
+  }
+  g.segment = p.last;
   return g;
+}
+
+IntermediateGoal findIntermediateGoal(std::span<const Vec2, 4> box_ccw, std::span<const Vec2> path, double goal_theta) {
+  std::array<PathPiece, 64> pieces{};
+  std::array<bool, 64> reached{};
+  reached.fill(true);
+  const std::size_t count = pathPiecesInBox(box_ccw, path, pieces);
+  return intermediateGoalOf(std::span<const PathPiece>(pieces.data(), count), reached, path, goal_theta);
 }
 
 // ---- construction ----
@@ -164,14 +205,20 @@ LocalMap::LocalMap(const LocalMapConfig& config) : config_(config) {
     }
   }
   row_any_.assign(padded_rows, 0);
+  reach_blocked_.assign(cells, 0);
+  reach_seen_.assign(cells, 0);
+  reach_queue_.assign(cells, 0);
   update(Pose2{}, PolygonSet{}, {}, 0.0);
+  real_ = nullptr;  // that set was a temporary
 }
 
 // ---- the cycle's step ----
 
 void LocalMap::update(const Pose2& robot, const PolygonSet& real, std::span<const Vec2> global_path,
-                      double goal_theta) {
+                      double goal_theta, double clearance_m) {
   robot_ = robot;
+  real_ = &real;
+  exact_static_ = false;
   cos_ = std::cos(robot.theta);
   sin_ = std::sin(robot.theta);
   frame_ = frameAt(config_.cell_m);
@@ -192,8 +239,79 @@ void LocalMap::update(const Pose2& robot, const PolygonSet& real, std::span<cons
   drawObstacles(real, aabb);
   buildCostmap();
 
-  goal_ = findIntermediateGoal(boxCorners(), global_path, goal_theta);
+  const std::size_t pieces = pathPiecesInBox(boxCorners(), global_path, pieces_);
+  reached_.fill(false);
+  reached_[0] = true;
+  // A path that leaves the box and comes back: which of its later pieces the robot reaches
+  // without leaving the box (the grid, only then: most cycles have one piece).
+  if (pieces > 1) reachPieces(pieces, global_path, clearance_m);
+  goal_ = intermediateGoalOf(std::span<const PathPiece>(pieces_.data(), pieces), reached_, global_path, goal_theta);
   if (global_path.empty()) goal_.pose = {robot.x, robot.y, goal_theta};  // nothing to follow: stay
+}
+
+// Reached within the box: a flood over the cells whose centre lies farther than the clearance
+// from every occupied cell's centre (less half a cell: C is drawn conservatively), 4-connected,
+// from the cells along the first piece. A piece one of whose cells the flood reaches is
+// reached, and the flood goes on along it (a piece of the route is a way in itself, also
+// where it runs closer to C than the clearance).
+void LocalMap::reachPieces(std::size_t count, std::span<const Vec2> path, double clearance_m) {
+  const std::size_t w = static_cast<std::size_t>(width_);
+  const double radius = std::max(0.0, clearance_m / config_.cell_m - 0.5);
+  const int r = floorToInt(radius + 1e-9);
+  const double r2 = radius * radius + 1e-9;
+  dilateGrid(reach_blocked_, r, r2);  // C dilated by the clearance
+  std::fill(reach_seen_.begin(), reach_seen_.end(), std::uint8_t{0});
+  std::size_t head = 0, tail = 0;
+  // Visits the cells along a piece, half a cell apart, until visit returns true.
+  auto alongPiece = [&](const PathPiece& piece, auto&& visit) {
+    for (std::size_t s = piece.first; s <= piece.last; ++s) {
+      const Vec2 a = s == piece.first ? piece.in : path[s];
+      const Vec2 b = s == piece.last ? piece.out : path[s + 1];
+      const int steps = std::max(1, ceilToInt(2.0 * (b - a).norm() / config_.cell_m));
+      for (int k = 0; k <= steps; ++k) {
+        int i = 0, j = 0;
+        nearestCell(a + (static_cast<double>(k) / steps) * (b - a), i, j);
+        if (visit(static_cast<std::size_t>(j) * w + static_cast<std::size_t>(i))) return true;
+      }
+    }
+    return false;
+  };
+  auto seed = [&](const PathPiece& piece) {
+    alongPiece(piece, [&](std::size_t c) {
+      if (reach_seen_[c] == 0) {
+        reach_seen_[c] = 1;
+        reach_queue_[tail++] = static_cast<std::uint32_t>(c);
+      }
+      return false;
+    });
+  };
+  auto pieceSeen = [&](const PathPiece& piece) {
+    return alongPiece(piece, [&](std::size_t c) { return reach_seen_[c] != 0; });
+  };
+  seed(pieces_[0]);
+  for (bool grew = true; grew;) {
+    // The flood: a cell's free 4-neighbours.
+    while (head < tail) {
+      const std::uint32_t c = reach_queue_[head++];
+      const int ci = static_cast<int>(c % w), cj = static_cast<int>(c / w);
+      const int ni[4] = {ci + 1, ci - 1, ci, ci};
+      const int nj[4] = {cj, cj, cj + 1, cj - 1};
+      for (int k = 0; k < 4; ++k) {
+        if (ni[k] < 0 || nj[k] < 0 || ni[k] >= width_ || nj[k] >= height_) continue;
+        const std::size_t nc = static_cast<std::size_t>(nj[k]) * w + static_cast<std::size_t>(ni[k]);
+        if (reach_seen_[nc] != 0 || reach_blocked_[nc] != 0) continue;
+        reach_seen_[nc] = 1;
+        reach_queue_[tail++] = static_cast<std::uint32_t>(nc);
+      }
+    }
+    grew = false;
+    for (std::size_t k = 1; k < count; ++k) {
+      if (reached_[k] || !pieceSeen(pieces_[k])) continue;
+      reached_[k] = true;
+      seed(pieces_[k]);
+      grew = true;
+    }
+  }
 }
 
 // C: conservative rasterization. A cell meets a closed polygon iff an edge passes through
@@ -315,23 +433,19 @@ void LocalMap::addEdgeCrossings(const Vec2& a, const Vec2& b, bool convex) {
   }
 }
 
-// C': C dilated by a disk of dilate_m (cell centre distances), then a separable Gaussian
-// blur (kernel sum 1, zero outside the box), and max(dilated, blurred) so that obstacles stay
-// exactly 1 while the cost falls off with distance to 0.
-void LocalMap::buildCostmap() {
+// C dilated by a disk of cell-centre distances (r2 in cells^2, r its whole part): row j + dj
+// contributes its cells within reach(dj) = floor(sqrt(r2 - dj^2)) along the row. Byte ORs
+// over shifted rows (the compiler vectorises them).
+void LocalMap::dilateGrid(std::vector<std::uint8_t>& out_grid, int r, double r2) const {
   const std::size_t w = static_cast<std::size_t>(width_);
-
-  // Dilation by a disk of cell-centre distances: row j + dj contributes its cells within
-  // reach(dj) = floor(sqrt(r^2 - dj^2)) along the row. Byte ORs over shifted rows (the
-  // compiler vectorises them).
-  std::fill(dilated8_.begin(), dilated8_.end(), std::uint8_t{0});
+  std::fill(out_grid.begin(), out_grid.end(), std::uint8_t{0});
   for (int j = 0; j < height_; ++j) {
-    std::uint8_t* out = dilated8_.data() + static_cast<std::size_t>(j) * w;
-    for (int dj = -dilate_cells_; dj <= dilate_cells_; ++dj) {
+    std::uint8_t* out = out_grid.data() + static_cast<std::size_t>(j) * w;
+    for (int dj = -r; dj <= r; ++dj) {
       const int jj = j + dj;
       if (jj < 0 || jj >= height_) continue;
       const std::uint8_t* g = grid_.data() + static_cast<std::size_t>(jj) * w;
-      const double rest = dilate_r2_ - static_cast<double>(dj * dj);
+      const double rest = r2 - static_cast<double>(dj * dj);
       if (rest < 0.0) continue;
       const int reach = std::min(floorToInt(std::sqrt(rest)), width_ - 1);
       for (std::size_t i = 0; i < w; ++i) out[i] |= g[i];
@@ -342,6 +456,15 @@ void LocalMap::buildCostmap() {
       }
     }
   }
+}
+
+// C': C dilated by a disk of dilate_m (cell centre distances), then a separable Gaussian
+// blur (kernel sum 1, zero outside the box), and max(dilated, blurred) so that obstacles stay
+// exactly 1 while the cost falls off with distance to 0.
+void LocalMap::buildCostmap() {
+  const std::size_t w = static_cast<std::size_t>(width_);
+
+  dilateGrid(dilated8_, dilate_cells_, dilate_r2_);
   if (blur_radius_ == 0) {
     std::transform(dilated8_.begin(), dilated8_.end(), costmap_.begin(),
                    [](std::uint8_t d) { return static_cast<float>(d); });

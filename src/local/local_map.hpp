@@ -49,9 +49,28 @@ GridSize boxGridSize(const LocalMapConfig& config, double cell_m);
 // The intermediate goal G~ (paper, Sec. III-C).
 struct IntermediateGoal {
   Pose2 pose;              // position, heading along the path (or the final goal's heading)
-  bool is_final = false;   // the whole remaining path lies inside the box: G~ = G
+  bool is_final = false;   // the path's end lies in the box and is reached within it: G~ = G
   std::size_t segment = 0; // index of the path segment on which G~ lies
 };
+
+// A piece of the path inside the (closed) box, in order along the path: it enters at `in`
+// on segment `first` (the path's start for the first piece, when that lies in the box) and
+// leaves at `out` on segment `last`, heading `heading` there (along that segment), or it holds
+// the path's end (`ends_path`: `out` is the last point).
+struct PathPiece {
+  std::size_t first = 0;
+  std::size_t last = 0;
+  Vec2 in{0.0, 0.0};
+  Vec2 out{0.0, 0.0};
+  double heading = 0.0;
+  bool ends_path = false;
+};
+
+// The path's pieces inside the convex counter-clockwise box, written to `out` (at most
+// out.size(): later ones are dropped); returns how many. The first piece starts at the path's
+// start, or, should that lie outside (a stale path), where the path first enters. No
+// allocation.
+std::size_t pathPiecesInBox(std::span<const Vec2, 4> box_ccw, std::span<const Vec2> path, std::span<PathPiece> out);
 
 // Grid of the box, robot-aligned. Cell (i, j): i along the robot's x (0 = rear edge),
 // j along the robot's y (0 = right edge). Row-major, j * width + i.
@@ -72,8 +91,11 @@ class LocalMap {
   // from `global_path` (start to goal, world frame) and the goal's heading `goal_theta`.
   // C' is zero-padded at the box's edges (obstacles outside the box are not drawn, and a
   // map's `bounds` are not obstacles here: pass them as polygons if they should be).
+  // `clearance_m`: how far from C the robot's centre keeps when G~ asks whether a later piece
+  // of the path is reached within the box (see G~ below).
   // No allocation. About 90 us on the office map (LocalMapTiming test, bench_local).
-  void update(const Pose2& robot, const PolygonSet& real, std::span<const Vec2> global_path, double goal_theta);
+  void update(const Pose2& robot, const PolygonSet& real, std::span<const Vec2> global_path, double goal_theta,
+              double clearance_m = 0.0);
 
   const Pose2& origin() const { return robot_; }  // the robot pose the box is attached to
   // The box in world coordinates, corners counter-clockwise (rear-right first).
@@ -89,6 +111,16 @@ class LocalMap {
   std::span<const std::uint8_t> grid() const { return grid_; }   // 0 free, 1 occupied
   std::span<const float> costmap() const { return costmap_; }
   const IntermediateGoal& intermediateGoal() const { return goal_; }
+
+  // The real obstacles this update drew C from (the set passed to update(); it must outlive
+  // the uses of this update).
+  const PolygonSet* realObstacles() const { return real_; }
+  // Issue 16: where the route runs through a passage only the footprint fits, the cycle asks
+  // the map's users to decide the static obstacles exactly: a pose the grid rejects is checked
+  // against realObstacles() (CollisionChecker). C's 5 cm cells, rasterized conservatively,
+  // close a slot with 2.5 cm to spare on each side. Every update() clears it.
+  void setExactStatic(bool on) { exact_static_ = on; }
+  bool exactStatic() const { return exact_static_; }
 
   // The grid's world -> cell map for this update, and the same box at another resolution
   // (STAA*'s closed table).
@@ -107,6 +139,10 @@ class LocalMap {
   void markEdgeCells(const Vec2& a, const Vec2& b);      // supercover of one edge
   void addEdgeCrossings(const Vec2& a, const Vec2& b, bool convex);  // at the row centres
   void buildCostmap();                                     // C' from grid_
+  void dilateGrid(std::vector<std::uint8_t>& out, int r, double r2) const;  // C dilated by a disk
+  // G~'s reach test: which of the path's pieces (pieces_[0, count)) the robot reaches
+  // without leaving the box, through cells at least clearance_m from C (reached_).
+  void reachPieces(std::size_t count, std::span<const Vec2> path, double clearance_m);
   Vec2 toGrid(const Vec2& w) const { return frame_.toGrid(w); }
 
   LocalMapConfig config_;
@@ -131,16 +167,32 @@ class LocalMap {
   int dilate_cells_ = 0;
   double dilate_r2_ = 0.0;                // dilation radius squared, in cells^2
   IntermediateGoal goal_;
+  // G~'s pieces and reach test (sized at construction).
+  static constexpr std::size_t kMaxPieces = 64;
+  std::array<PathPiece, kMaxPieces> pieces_{};
+  std::array<bool, kMaxPieces> reached_{};
+  std::vector<std::uint8_t> reach_blocked_;  // C dilated by the clearance
+  std::vector<std::uint8_t> reach_seen_;
+  std::vector<std::uint32_t> reach_queue_;
+  const PolygonSet* real_ = nullptr;
+  bool exact_static_ = false;
 };
 
-// Where the path first leaves the box (the paper's G~), or the goal if it never does.
-// Walking from the path's start, the first segment whose end lies outside the (closed) box
-// gives G~ at its exit point, heading along the segment; later re-entries do not matter.
-// If the path never leaves, G~ = its last point with heading goal_theta and is_final.
-// A start outside the box (a stale path; should not happen) is skipped: the walk begins
-// where the path first enters the box; a path that never touches the box gives G~ = its
-// start, heading along its first segment, not final. An empty path gives is_final at the
-// origin (update() puts it at the robot).
+// G~ (issue 16: the paper's "where the path leaves the box", made steady): the farthest point
+// along the path, by arc length, that lies in the box and is reached without leaving it, that
+// is, the end of the last of the path's pieces in the box that the robot reaches within it
+// (`reached[k]` for piece k; the first piece, which the robot is on, always counts). Where
+// the path loops back near the box's edge, the first exit jumps by metres along the path when
+// a small turn of the robot moves that edge across the loop; this point moves only as the
+// pieces' ends move, and jumps only when its own piece enters or leaves the box. G~ heads
+// along the path where it leaves; a reached piece holding the path's end gives G~ = that end
+// with heading goal_theta and is_final. With one piece (the path leaves the box once and
+// stays out, or never leaves) it is the paper's first exit, to the bit. A path that never
+// touches the box gives G~ = its start, heading along its first segment, not final. An empty
+// path gives is_final at the origin (update() puts it at the robot).
+IntermediateGoal intermediateGoalOf(std::span<const PathPiece> pieces, std::span<const bool> reached,
+                                    std::span<const Vec2> path, double goal_theta);
+// The same with every piece reached (no obstacles in the box).
 IntermediateGoal findIntermediateGoal(std::span<const Vec2, 4> box_ccw, std::span<const Vec2> path, double goal_theta);
 
 }  // namespace staa

@@ -6,6 +6,7 @@
 #include "planner/distance_field.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -35,6 +36,7 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
   dynamic_margin_ = sample_step_ + std::max(0.0, dynamic_clearance_m);
   const std::size_t fn = footprint_.size();
   footprint_dynamic_.resize(fn);
+  footprint_exact_.resize(fn);
   for (std::size_t i = 0; i < fn; ++i) {
     const Vec2& prev = footprint_[(i + fn - 1) % fn];
     const Vec2& cur = footprint_[i];
@@ -43,6 +45,7 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
     const Vec2 n1{e1.y(), -e1.x()}, n2{e2.y(), -e2.x()};  // outward for counter-clockwise
     const double denom = std::max(1.0 + n1.dot(n2), 0.25);  // caps the mitre of sharp corners
     footprint_dynamic_[i] = cur + dynamic_margin_ * (n1 + n2) / denom;
+    footprint_exact_[i] = cur + kExactMargin * (n1 + n2) / denom;
   }
 
   // Outline points: every vertex plus points along each edge, no two more than a sample
@@ -97,6 +100,13 @@ CollisionChecker::CollisionChecker(const RobotProfile& robot, const LocalMapConf
   }
   outline_begin_[circle_count_] = m;
   outline_ = sorted;
+  // The distance from each outline point to the next one of its circle's group (robot frame;
+  // a pose moves them rigidly): how far a clearance found at one point reaches along the group.
+  for (std::size_t c = 0; c < circle_count_; ++c) {
+    for (std::size_t q = outline_begin_[c]; q + 1 < outline_begin_[c + 1]; ++q) {
+      outline_gap_[q] = (outline_[q + 1] - outline_[q]).norm();
+    }
+  }
   // Each circle must cover its points (it covers its slab of the bounding box; the nearest
   // centre of points on the box is that slab's): grow it if rounding says otherwise.
   for (std::size_t c = 0; c < circle_count_; ++c) {
@@ -121,6 +131,7 @@ void CollisionChecker::prepare(const LocalMap& map) {
   frame_.yy = c * inv;
   frame_.y0 = (sn * o.x - c * o.y + map.config().side_m) * inv;
   grid_ = map.grid().data();
+  exact_ = map.exactStatic() ? map.realObstacles() : nullptr;
   grid_w_ = map.width();
   grid_h_ = map.height();
   if (distance_.size() != map.grid().size()) {
@@ -164,16 +175,46 @@ bool CollisionChecker::fastPoseFreeStatic(const FastPose& p, double* slack) cons
     const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
     return cell >= 0 && grid_[cell] != 0;
   };
-  if (occupiedAt(centroid_)) return false;
+  if (occupiedAt(centroid_)) return exactPoseFree(p);
   // Only the outline points of the circles that are not clear (a clear circle holds no
-  // occupied cell, so neither do its points).
+  // occupied cell, so neither do its points). A looked-up point's distance field value clears
+  // the points after it within that distance (the field is 1-Lipschitz and conservative).
   for (std::size_t c = 0; c < circle_count_; ++c) {
     if (clear[c]) continue;
+    double covered = -1.0;  // distance still cleared by the last looked-up point
     for (std::size_t k = outline_begin_[c]; k < outline_begin_[c + 1]; ++k) {
-      if (occupiedAt(outline_[k])) return false;
+      if (k > outline_begin_[c]) covered -= outline_gap_[k - 1];
+      if (covered >= 0.0) continue;
+      const Vec2& q = outline_[k];
+      const std::ptrdiff_t cell = cellIndex(ox + ax * q.x() + ay * q.y(), oy + bx * q.x() + by * q.y());
+      covered = -1.0;  // outside the grid: free, but no clearance is claimed
+      if (cell >= 0) {
+        if (grid_[cell] != 0) return exactPoseFree(p);
+        covered = distance_[static_cast<std::size_t>(cell)];
+      }
     }
   }
   return true;
+}
+
+bool CollisionChecker::exactPoseFree(const FastPose& p) const {
+  if (exact_ == nullptr) return false;
+  // The grown footprint at the pose overlaps an obstacle's interior when one of its vertices
+  // or edges enters one, or when an obstacle lies wholly inside it (one of its vertices does).
+  const std::size_t n = footprint_exact_.size();
+  Box box{{p.x, p.y}, {p.x, p.y}};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& q = footprint_exact_[i];
+    exact_placed_[i] = Vec2{p.x + p.c * q.x() - p.s * q.y(), p.y + p.s * q.x() + p.c * q.y()};
+    box.min = box.min.cwiseMin(exact_placed_[i]);
+    box.max = box.max.cwiseMax(exact_placed_[i]);
+    if (exact_->pointBlocked(exact_placed_[i])) return false;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (exact_->segmentBlocked(exact_placed_[i], exact_placed_[(i + 1) % n])) return false;
+  }
+  const PolygonView robot{exact_placed_.data(), n};
+  return !exact_->forEachEdgeInBox(box, [&](std::size_t v) { return pointInPolygon(exact_->vertex(v), robot); });
 }
 
 bool CollisionChecker::segmentClear(const Vec2& a, const Vec2& b, double radius) const {
@@ -211,29 +252,50 @@ bool CollisionChecker::motionFreeStatic(const UnicycleState& from, const ArcVelo
                                         std::cos(dth), std::sin(dth)));
 }
 
-bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const {
+bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const { return motionFreeStatic(m, 0.0, nullptr); }
+
+bool CollisionChecker::motionFreeStatic(const ArcMotion& m, double start_slack, double* end_slack,
+                                        double start_disc) const {
+  // No point of the robot leaves the start pose's clearance, or the origin stays within the
+  // start's disc clearance: the whole motion is free (every sample's lookups would say so
+  // too; the field is 1-Lipschitz and conservative).
+  const double travel = travelBound(m);
+  const double origin_travel = std::abs(m.v_mid) * m.dt;
+  if ((start_slack > 0.0 && travel <= start_slack) || (start_disc > 0.0 && origin_travel <= start_disc)) {
+    if (end_slack != nullptr) *end_slack = -1.0;
+    return true;
+  }
   // Check the end pose first: most collisions show there, and it is the one the paper checks.
-  if (!fastPoseFreeStatic(FastPose{m.x1, m.y1, m.c1, m.s1})) return false;
+  double end_margin = 0.0;
+  const bool end_free = fastPoseFreeStatic(FastPose{m.x1, m.y1, m.c1, m.s1}, &end_margin);
+  if (end_slack != nullptr) *end_slack = end_margin;
+  if (!end_free) return false;
   const ArcVelocities vel{0.0, 0.0, m.v_mid, m.w_mid};
   const int n = samplesFor(vel, m.dt);
   if (n <= 1) return true;
   // The samples in between, stepping the heading by a fixed rotation. A checked pose's
   // clearance margin lets the following samples within that much travel go unchecked: no
-  // point of the robot moves farther than the travel bound per sample.
+  // point of the robot moves farther than the travel bound per sample. The start's margin
+  // covers the first samples, the end's the last ones.
+  const double per_sample = travel / n;
+  const double origin_per_sample = origin_travel / n;
+  if (start_slack + end_margin >= travel) return true;
   const double step = m.w_mid * m.dt / n;
   double cs, ss;
   sinCos(step, cs, ss);
   const bool straight = std::abs(m.w_mid * m.dt) < 1e-6;
   const double r = straight ? 0.0 : m.v_mid / m.w_mid;
-  const double per_sample = (std::abs(m.v_mid) * m.dt + std::abs(m.w_mid) * m.dt * circumradius_) / n;
   double c = m.c0, sn = m.s0;
-  double covered = -1.0;  // travel still covered by the last checked pose's margin
+  double covered = start_slack > 0.0 ? start_slack : -1.0;  // travel still covered by the last checked pose's margin
   for (int k = 1; k < n; ++k) {
     const double nc = c * cs - sn * ss;
     sn = sn * cs + c * ss;
     c = nc;
     covered -= per_sample;
     if (covered >= 0.0) continue;
+    if (start_disc > 0.0 && origin_per_sample * k <= start_disc) continue;
+    // The rest lies within the end pose's margin.
+    if (static_cast<double>(n - k) * per_sample <= end_margin) return true;
     FastPose p{0.0, 0.0, c, sn};
     if (straight) {
       const double d = m.v_mid * m.dt * k / n;
@@ -250,44 +312,50 @@ bool CollisionChecker::motionFreeStatic(const ArcMotion& m) const {
   return true;
 }
 
+bool CollisionChecker::obstacleHits(std::size_t k, const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
+                                    double heading_spread, bool turning, bool& placed) const {
+  const Vec2 p = pose.position();
+  const FixedPolygon& o = obstacles.observed(k);
+  const Vec2 shift = obstacles.displacement(k, t);
+  const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
+  const double r = 0.5 * (o.box.max - o.box.min).norm();
+  const double spread = heading_spread > 0.0 ? heading_spread * shift.norm() : 0.0;
+  // The grown polygon's rounded corners lie within sqrt(2) * spread of the outline.
+  const double reach = r + circumradius_ + 2.0 * dynamic_margin_ + 1.5 * spread;
+  const auto overlaps = [&](const FixedPolygon& obstacle) {
+    if (!placed) {
+      transformPolygon(footprint_dynamic_, pose, placed_);
+      placed = true;
+    }
+    const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
+    return convex_ ? convexIntersect(robot, obstacle.view()) : polygonsOverlap(robot, obstacle.view());
+  };
+  if ((center - p).squaredNorm() <= reach * reach) {
+    if (spread > 0.0) {
+      obstacles.predictInflated(k, t, spread, 1, scratch_);
+    } else {
+      obstacles.predict(k, t, scratch_);
+    }
+    if (overlaps(scratch_)) return true;
+  }
+  // On its circle the obstacle's centre stays within the distance it has travelled of where
+  // it was seen (a chord is no longer than its arc): far ones are skipped unpredicted.
+  const Vec2 seen_center = 0.5 * (o.box.min + o.box.max);
+  const double circle_reach = shift.norm() + r + circumradius_ + 2.0 * dynamic_margin_;
+  if (turning && obstacles.turnRate(k) != 0.0 && (seen_center - p).squaredNorm() <= circle_reach * circle_reach) {
+    obstacles.predictTurning(k, t, scratch_);
+    const Vec2 turned_center = 0.5 * (scratch_.box.min + scratch_.box.max);
+    const double turned_reach = 0.5 * (scratch_.box.max - scratch_.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
+    if ((turned_center - p).squaredNorm() <= turned_reach * turned_reach && overlaps(scratch_)) return true;
+  }
+  return false;
+}
+
 bool CollisionChecker::poseFreeDynamic(const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
                                        double heading_spread, bool turning) const {
-  const Vec2 p = pose.position();
   bool placed = false;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
-    const FixedPolygon& o = obstacles.observed(k);
-    const Vec2 shift = obstacles.displacement(k, t);
-    const Vec2 center = 0.5 * (o.box.min + o.box.max) + shift;
-    const double r = 0.5 * (o.box.max - o.box.min).norm();
-    const double spread = heading_spread > 0.0 ? heading_spread * shift.norm() : 0.0;
-    // The grown polygon's rounded corners lie within sqrt(2) * spread of the outline.
-    const double reach = r + circumradius_ + 2.0 * dynamic_margin_ + 1.5 * spread;
-    const auto overlaps = [&](const FixedPolygon& obstacle) {
-      if (!placed) {
-        transformPolygon(footprint_dynamic_, pose, placed_);
-        placed = true;
-      }
-      const PolygonView robot{placed_.data(), footprint_dynamic_.size()};
-      return convex_ ? convexIntersect(robot, obstacle.view()) : polygonsOverlap(robot, obstacle.view());
-    };
-    if ((center - p).squaredNorm() <= reach * reach) {
-      if (spread > 0.0) {
-        obstacles.predictInflated(k, t, spread, 1, scratch_);
-      } else {
-        obstacles.predict(k, t, scratch_);
-      }
-      if (overlaps(scratch_)) return false;
-    }
-    // On its circle the obstacle's centre stays within the distance it has travelled of where
-    // it was seen (a chord is no longer than its arc): far ones are skipped unpredicted.
-    const Vec2 seen_center = 0.5 * (o.box.min + o.box.max);
-    const double circle_reach = shift.norm() + r + circumradius_ + 2.0 * dynamic_margin_;
-    if (turning && obstacles.turnRate(k) != 0.0 && (seen_center - p).squaredNorm() <= circle_reach * circle_reach) {
-      obstacles.predictTurning(k, t, scratch_);
-      const Vec2 turned_center = 0.5 * (scratch_.box.min + scratch_.box.max);
-      const double turned_reach = 0.5 * (scratch_.box.max - scratch_.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
-      if ((turned_center - p).squaredNorm() <= turned_reach * turned_reach && overlaps(scratch_)) return false;
-    }
+    if (obstacleHits(k, pose, obstacles, t, heading_spread, turning, placed)) return false;
   }
   return true;
 }
@@ -296,29 +364,73 @@ bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVel
                                          const DynamicObstacleSet& obstacles, double t0, double heading_spread,
                                          bool turning) const {
   if (obstacles.size() == 0) return true;
-  // Enough samples that neither the robot nor the fastest obstacle point moves more than a
-  // sample step between two of them (a turning obstacle's corners also sweep round).
-  double fastest = 0.0;
+  const NearObstacles near =
+      nearObstacles(from.position(), std::abs(vel.v_mid) * dt, obstacles, t0, dt, heading_spread, turning);
+  return motionFreeDynamic(from, vel, dt, obstacles, t0, near, heading_spread, turning);
+}
+
+CollisionChecker::NearObstacles CollisionChecker::nearObstacles(const Vec2& p0, double travel,
+                                                                const DynamicObstacleSet& obstacles, double t0,
+                                                                double dt, double heading_spread, bool turning) const {
+  // Obstacle k's displacement at time t lies within speed * dt / 2 of its displacement at the
+  // middle of the interval (it grows by at most its speed), the robot's origin within `travel`
+  // of p0 (a chord is no longer than its arc); 1 nm covers the rounding of the samples' own
+  // arithmetic.
+  constexpr double kRounding = 1e-9;
+  NearObstacles near;
+  const double tm = t0 + 0.5 * dt;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
-    double speed = obstacles.velocity(k).norm();
-    if (turning) {
-      const FixedPolygon& o = obstacles.observed(k);
-      speed += std::abs(obstacles.turnRate(k)) * 0.5 * (o.box.max - o.box.min).norm();
+    const FixedPolygon& o = obstacles.observed(k);
+    // Enough samples that neither the robot nor the fastest obstacle point moves more than a
+    // sample step between two of them (a turning obstacle's corners also sweep round).
+    const double linear = obstacles.velocity(k).norm();
+    double speed = linear;
+    if (turning) speed += std::abs(obstacles.turnRate(k)) * 0.5 * (o.box.max - o.box.min).norm();
+    near.fastest = std::max(near.fastest, speed);
+    if (k >= kMaskedObstacles) continue;
+    const Vec2 shift = obstacles.displacement(k, tm);
+    const double drift = 0.5 * linear * dt;
+    const double shift_max = shift.norm() + drift;
+    const double base = 0.5 * (o.box.max - o.box.min).norm() + circumradius_ + 2.0 * dynamic_margin_;
+    const Vec2 seen_center = 0.5 * (o.box.min + o.box.max);
+    // obstacleHits' straight test, its reach at its largest over the interval.
+    const double spread = heading_spread > 0.0 ? heading_spread * shift_max : 0.0;
+    const double far = base + 1.5 * spread + drift + travel + kRounding;
+    bool close = (seen_center + shift - p0).squaredNorm() <= far * far;
+    // Its test on the circle, about where the obstacle was seen.
+    if (!close && turning && obstacles.turnRate(k) != 0.0) {
+      const double circle_far = shift_max + base + travel + kRounding;
+      close = (seen_center - p0).squaredNorm() <= circle_far * circle_far;
     }
-    fastest = std::max(fastest, speed);
+    if (close) near.mask |= std::uint64_t{1} << k;
   }
-  const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(fastest * dt / sample_step_)));
+  return near;
+}
+
+bool CollisionChecker::motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
+                                         const DynamicObstacleSet& obstacles, double t0, const NearObstacles& near,
+                                         double heading_spread, bool turning) const {
+  const std::size_t count = obstacles.size();
+  if (count == 0 || (near.mask == 0 && count <= kMaskedObstacles)) return true;
+  const int n = std::max(samplesFor(vel, dt), static_cast<int>(std::ceil(near.fastest * dt / sample_step_)));
   for (int k = n; k >= 1; --k) {
     const double t = dt * k / n;
-    if (!poseFreeDynamic(poseAlongArc(from, vel.v_mid, vel.w_mid, t), obstacles, t0 + t, heading_spread, turning)) {
-      return false;
+    const Pose2 pose = poseAlongArc(from, vel.v_mid, vel.w_mid, t);
+    bool placed = false;
+    for (std::uint64_t m = near.mask; m != 0; m &= m - 1) {
+      const auto i = static_cast<std::size_t>(std::countr_zero(m));
+      if (obstacleHits(i, pose, obstacles, t0 + t, heading_spread, turning, placed)) return false;
+    }
+    for (std::size_t i = kMaskedObstacles; i < count; ++i) {
+      if (obstacleHits(i, pose, obstacles, t0 + t, heading_spread, turning, placed)) return false;
     }
   }
   return true;
 }
 
-double CollisionChecker::distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const {
-  double best = std::numeric_limits<double>::infinity();
+double CollisionChecker::distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t,
+                                           double beyond) const {
+  double best = beyond;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     const FixedPolygon& o = obstacles.observed(k);
     const Vec2 shift = obstacles.displacement(k, t);

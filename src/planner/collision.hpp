@@ -18,6 +18,9 @@
 #include "robot/unicycle.hpp"
 
 #include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -41,6 +44,26 @@ class CollisionChecker {
   // close enough that no footprint point moves more than a sample step between them.
   bool motionFreeStatic(const UnicycleState& from, const ArcVelocities& vel, double dt) const;
   bool motionFreeStatic(const ArcMotion& motion) const;
+  // The same test, knowing how far every point of the robot may move from the motion's start
+  // without touching the grid (`start_slack`, from fastPoseFreeStatic; 0 when unknown): a
+  // motion no point of which travels farther is free without a lookup, and the samples within
+  // that travel of either end (the end pose's own slack) are not looked up. `end_slack`, when
+  // given, receives the end pose's slack, or -1 when the end pose was not looked up.
+  // `start_disc` (discSlack of the start; 0 when unknown) clears by the origin's travel alone:
+  // every point of the robot stays within the circumradius of the origin, whatever it turns.
+  bool motionFreeStatic(const ArcMotion& motion, double start_slack, double* end_slack, double start_disc = 0.0) const;
+  // How far the robot's origin may move from (x, y), turning as it likes, before the
+  // footprint can touch the grid: the distance field there less the circumradius (0 outside
+  // the grid or when closer).
+  double discSlack(double x, double y) const {
+    const std::ptrdiff_t cell = cellIndex(gridX(x, y), gridY(x, y));
+    return cell < 0 ? 0.0 : std::max(0.0, distance_[static_cast<std::size_t>(cell)] - circumradius_);
+  }
+  // The farthest any point of the robot travels along the motion: its bound on how far a
+  // clearance margin must reach.
+  double travelBound(const ArcMotion& motion) const {
+    return std::abs(motion.v_mid) * motion.dt + std::abs(motion.w_mid) * motion.dt * circumradius_;
+  }
   // The footprint at `pose` overlaps none of the obstacles moved to time t. With
   // heading_spread > 0 (rad) each obstacle is grown by heading_spread times the distance it
   // has moved: the room an obstacle needs whose heading is known only to about that angle
@@ -54,8 +77,28 @@ class CollisionChecker {
                          const DynamicObstacleSet& obstacles, double t0, double heading_spread = 0.0,
                          bool turning = false) const;
 
-  // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3).
-  double distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t) const;
+  // Which moving obstacles can come near a motion from `p0` over [t0, t0 + dt] on which the
+  // robot's origin travels at most `travel` (heading_spread and turning as poseFreeDynamic):
+  // bit k of `mask` is clear when obstacle k fails the bounding-circle tests of every sample
+  // of every such motion. Obstacles from kMaskedObstacles on have no bit: they are always
+  // checked. `fastest` is the speed that sets motionFreeDynamic's number of samples.
+  static constexpr std::size_t kMaskedObstacles = 64;
+  struct NearObstacles {
+    std::uint64_t mask = 0;
+    double fastest = 0.0;
+  };
+  NearObstacles nearObstacles(const Vec2& p0, double travel, const DynamicObstacleSet& obstacles, double t0, double dt,
+                              double heading_spread = 0.0, bool turning = false) const;
+  // motionFreeDynamic against the obstacles `near` found for a reach that covers this motion
+  // (same heading_spread and turning): the same samples, the same answer, fewer obstacles.
+  bool motionFreeDynamic(const UnicycleState& from, const ArcVelocities& vel, double dt,
+                         const DynamicObstacleSet& obstacles, double t0, const NearObstacles& near,
+                         double heading_spread = 0.0, bool turning = false) const;
+
+  // Distance from the robot's position to the nearest predicted obstacle edge (for Eq. 3);
+  // `beyond` when every edge is at least that far.
+  double distanceToDynamic(const Vec2& p, const DynamicObstacleSet& obstacles, double t,
+                           double beyond = std::numeric_limits<double>::infinity()) const;
 
   // A pose with its heading's cosine and sine, so that a pose costs one sincos (or none, when
   // a caller steps along an arc by rotation).
@@ -71,6 +114,12 @@ class CollisionChecker {
   // "don't know": near an obstacle, outside the local box, or after too many steps.
   bool segmentClear(const Vec2& a, const Vec2& b, double radius) const;
 
+  // Where the local map asks for it (LocalMap::exactStatic: the route runs through a passage
+  // only the footprint fits, issue 16), a pose the grid rejects is decided by the exact test of
+  // the footprint grown by this margin against the map's real obstacles.
+  static constexpr double kExactMargin = 0.01;
+  bool exactStatic() const { return exact_ != nullptr; }
+
   // This cycle's conservative distance (m) from each grid cell to the nearest occupied one.
   std::span<const float> distanceField() const { return distance_; }
 
@@ -80,6 +129,12 @@ class CollisionChecker {
 
  private:
   int samplesFor(const ArcVelocities& vel, double dt) const;
+  // Whether obstacle k at time t (grown and predicted as poseFreeDynamic says) overlaps the
+  // footprint at `pose`; `placed` caches the placed footprint across obstacles of one pose.
+  bool obstacleHits(std::size_t k, const Pose2& pose, const DynamicObstacleSet& obstacles, double t,
+                    double heading_spread, bool turning, bool& placed) const;
+  // The exact static test (see kExactMargin); false without this cycle's exact obstacles.
+  bool exactPoseFree(const FastPose& p) const;
   // Grid coordinates (cells) of a world point: the local map's frame of this cycle.
   double gridX(double x, double y) const { return frame_.gridX(x, y); }
   double gridY(double x, double y) const { return frame_.gridY(x, y); }
@@ -106,8 +161,12 @@ class CollisionChecker {
   std::array<Vec2, kMaxOutline> outline_{};
   std::size_t outline_count_ = 0;
   std::array<std::size_t, kMaxCircles + 1> outline_begin_{};  // outline_ grouped by circle
+  std::array<double, kMaxOutline> outline_gap_{};             // to the next point of the group
   Vec2 centroid_{0.0, 0.0};
   std::vector<float> distance_;  // per cell, metres, conservative
+  const PolygonSet* exact_ = nullptr;  // this cycle's real obstacles, when the map asks for exact tests
+  Polygon footprint_exact_;            // grown by kExactMargin (mitred)
+  mutable std::array<Vec2, 64> exact_placed_{};
   mutable FixedPolygon scratch_;
   mutable std::array<Vec2, 64> placed_{};
 };

@@ -72,6 +72,7 @@ Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, 
   MinimalConstruct::Options opt;
   opt.max_dynamic_polygons = views_.size();
   opt.max_dynamic_vertices = views_.size() * FixedPolygon::kCapacity;
+  search_options_ = opt;
   static_search_ = MinimalConstruct(opt);
   static_search_.setStaticObstacles(inflated_static);
   for (MinimalConstruct& mc : dynamic_search_) {
@@ -87,6 +88,17 @@ Heuristic::Heuristic(const HeuristicConfig& config, const MotionLimits& limits, 
   }
 }
 
+void Heuristic::setPassageObstacles(const std::vector<Polygon>& passage, double inflation_m) {
+  passage_static_ = MinimalConstruct(search_options_);
+  passage_static_.setStaticObstacles(passage);
+  for (MinimalConstruct& mc : passage_dynamic_) {
+    mc = MinimalConstruct(search_options_);
+    mc.setStaticObstacles(passage);
+  }
+  passage_inflation_m_ = inflation_m;
+  has_passage_ = true;
+}
+
 bool Heuristic::clearSegment(const void* self, const Vec2& a, const Vec2& b) {
   const auto* h = static_cast<const Heuristic*>(self);
   return h->clearance_->segmentClear(a, b, h->config_.local_reach_m);
@@ -100,9 +112,11 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
   // The collision grid's clearance (this cycle's) may vouch for free segments of the local
   // paths: their obstacles reach at most local_reach_m beyond the real ones.
   clearance_ = config_.local_reach_m > 0.0 ? clearance : nullptr;
+  // (The passage map's obstacles reach less far than the first set's: still within it.)
   const MinimalConstruct::FreeSegmentOracle oracle = clearance_ != nullptr ? &Heuristic::clearSegment : nullptr;
-  static_search_.setFreeSegmentOracle(oracle, this);
-  for (MinimalConstruct& mc : dynamic_search_) mc.setFreeSegmentOracle(oracle, this);
+  passage_active_ = use_passage_;
+  staticSearch().setFreeSegmentOracle(oracle, this);
+  for (std::size_t k = 0; k < 3; ++k) dynamicSearch(k).setFreeSegmentOracle(oracle, this);
   final_goal_ = map.intermediateGoal().is_final;
   const std::size_t n = std::min(obstacles.size(), views_.size());
   for (int k = 0; k < 3; ++k) {
@@ -113,7 +127,7 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
       obstacles.predictInflated(i, (k + 1) * dt, config_.dynamic_inflation_m, config_.arc_steps, f);
       views_[i] = f.view();
     }
-    dynamic_search_[static_cast<std::size_t>(k)].setDynamicObstacles(std::span<const PolygonView>(views_.data(), n));
+    dynamicSearch(static_cast<std::size_t>(k)).setDynamicObstacles(std::span<const PolygonView>(views_.data(), n));
   }
   if (config_.kind == HeuristicKind::kDijkstraRtr) buildDijkstra(map, clearance);
 }
@@ -145,10 +159,10 @@ double Heuristic::evaluatePath(const UnicycleState& s, int depth) {
   // The static path first (its tree is shared by all depths). Where the predicted obstacles
   // D'(t) leave it untouched it is also the shortest path among them (obstacles only make
   // paths longer), so the depth's dynamic search runs only for paths that D'(t) cuts.
-  MinimalConstruct::Result r = static_search_.query(p, g, false, deadline_);
+  MinimalConstruct::Result r = staticSearch().query(p, g, false, deadline_);
   const bool dynamic = depth >= 1 && depth <= config_.dynamic_depth && has_dynamic_[static_cast<std::size_t>(depth - 1)];
   if (dynamic && r.status == MinimalConstruct::Status::kFound) {
-    MinimalConstruct& search = dynamic_search_[static_cast<std::size_t>(depth - 1)];
+    MinimalConstruct& search = dynamicSearch(static_cast<std::size_t>(depth - 1));
     const PolygonSet& d = search.dynamicObstacles();
     bool clear = true;
     for (std::size_t i = 0; i < r.path.size() && clear; ++i) clear = !d.pointBlocked(r.path[i]);
@@ -181,7 +195,8 @@ void Heuristic::buildDijkstra(const LocalMap& map, const CollisionChecker* clear
   } else {
     conservativeDistanceField(map.grid(), w, h, map.config().cell_m, dijkstra_);
   }
-  for (std::size_t i = 0; i < free_.size(); ++i) free_[i] = dijkstra_[i] >= config_.static_inflation_m ? 1 : 0;
+  const double radius = passage_active_ ? passage_inflation_m_ : config_.static_inflation_m;
+  for (std::size_t i = 0; i < free_.size(); ++i) free_[i] = dijkstra_[i] >= radius ? 1 : 0;
   const float inf = std::numeric_limits<float>::infinity();
   std::fill(dijkstra_.begin(), dijkstra_.end(), inf);
   heap_.clear();

@@ -67,6 +67,14 @@ class Heuristic {
   void prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, double dt, const LocalMap& map,
                const CollisionChecker* clearance = nullptr, const Deadline& deadline = {});
 
+  // The passage map M'' of the global path (issue 16): a second set of static obstacles for
+  // the local paths, grown by `inflation_m` (load time: allocates). A cycle whose route runs
+  // through a passage the first set closes uses it (usePassageObstacles, before prepare), so
+  // that the local paths follow the route; any other cycle keeps the first set.
+  void setPassageObstacles(const std::vector<Polygon>& passage, double inflation_m);
+  void usePassageObstacles(bool on) { use_passage_ = on && has_passage_; }
+  bool usingPassageObstacles() const { return use_passage_; }
+
   // h for a state at search depth `depth` (time depth * dt).
   double evaluate(const UnicycleState& s, int depth);
   // A lower bound of evaluate() for any depth, at the cost of a square root: the straight
@@ -84,6 +92,8 @@ class Heuristic {
   void forgetSearches() {
     static_search_.forgetGoal();
     for (MinimalConstruct& mc : dynamic_search_) mc.forgetGoal();
+    passage_static_.forgetGoal();
+    for (MinimalConstruct& mc : passage_dynamic_) mc.forgetGoal();
   }
 
  private:
@@ -98,6 +108,16 @@ class Heuristic {
   bool final_goal_ = false;
   MinimalConstruct static_search_;
   std::array<MinimalConstruct, 3> dynamic_search_;
+  MinimalConstruct::Options search_options_;
+  // The passage map's searches, and the set this cycle uses.
+  MinimalConstruct passage_static_;
+  std::array<MinimalConstruct, 3> passage_dynamic_;
+  bool has_passage_ = false;
+  bool use_passage_ = false;       // asked for the next prepare()
+  bool passage_active_ = false;    // this cycle's set (fixed at prepare())
+  double passage_inflation_m_ = 0.0;
+  MinimalConstruct& staticSearch() { return passage_active_ ? passage_static_ : static_search_; }
+  MinimalConstruct& dynamicSearch(std::size_t k) { return passage_active_ ? passage_dynamic_[k] : dynamic_search_[k]; }
   std::array<bool, 3> has_dynamic_{};
   std::vector<FixedPolygon> inflated_;  // D'(t) at the three depths, max_obstacles each
   std::vector<PolygonView> views_;

@@ -56,7 +56,21 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
   closed_h_ = closed_size.height;
   closed_t_ = static_cast<int>(std::ceil(2.0 * kPi / config_.closed_theta_rad));
   inv_two_pi_ = 1.0 / (2.0 * kPi);
-  closed_.assign(static_cast<std::size_t>(closed_w_) * static_cast<std::size_t>(closed_h_) * static_cast<std::size_t>(closed_t_), 0);
+  const std::size_t cells = static_cast<std::size_t>(closed_w_) * static_cast<std::size_t>(closed_h_) * static_cast<std::size_t>(closed_t_);
+  closed_.assign((cells + 63) / 64, 0);
+  closed_words_.reserve(config_.max_nodes);  // a word is listed when a pop closes its first cell
+}
+
+void StaaStar::close(std::size_t cell) {
+  std::uint64_t& word = closed_[cell >> 6];
+  if (word == 0) {
+    if (closed_words_.size() < closed_words_.capacity()) {
+      closed_words_.push_back(static_cast<std::uint32_t>(cell >> 6));
+    } else {
+      closed_overflow_ = true;
+    }
+  }
+  word |= std::uint64_t{1} << (cell & 63);
 }
 
 // The closed table coincides with the local grid (paper, Sec. III-E-2): x and y in the box's
@@ -69,9 +83,9 @@ bool StaaStar::closedIndex(double x, double y, double theta, std::size_t& index)
   double th = theta * inv_two_pi_;
   th = (th - std::floor(th)) * closed_t_;  // [0, closed_t_)
   const int t = std::min(static_cast<int>(th), closed_t_ - 1);
-  index = (static_cast<std::size_t>(t) * static_cast<std::size_t>(closed_h_) + static_cast<std::size_t>(fj)) *
-              static_cast<std::size_t>(closed_w_) +
-          static_cast<std::size_t>(fi);
+  index = (static_cast<std::size_t>(fj) * static_cast<std::size_t>(closed_w_) + static_cast<std::size_t>(fi)) *
+              static_cast<std::size_t>(closed_t_) +
+          static_cast<std::size_t>(t);
   return true;
 }
 
@@ -98,14 +112,24 @@ std::int32_t StaaStar::pop() {
 }
 
 double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const DynamicObstacleSet& obstacles,
-                                bool stand, double heading_spread, bool turning) const {
+                                bool stand, double heading_spread, bool turning, double start_slack,
+                                bool check_static) const {
   constexpr double kClear = std::numeric_limits<double>::infinity();
   const double step = config_.brake_step_s;
   UnicycleState s = from;
   double t = t0;
+  double slack = start_slack;  // the clearance of s, carried along the stop (0: not known)
   for (int k = 0; k < 64 && (std::abs(s.v) > 1e-3 || std::abs(s.w) > 1e-3); ++k) {
     const ArcVelocities vel = arcVelocities(s, brakeAction(s, limits_, step), step, limits_);
-    if (!collision_.motionFreeStatic(s, vel, step)) return t;
+    if (check_static) {
+      const double dth = vel.w_mid * step;
+      const ArcMotion motion = makeArcMotion(s, std::cos(s.theta), std::sin(s.theta), vel.v_mid, vel.w_mid, step,
+                                             std::cos(dth), std::sin(dth));
+      double end_slack = -1.0;
+      if (!collision_.motionFreeStatic(motion, slack, &end_slack)) return t;
+      // Not looked up: the end is within the motion's travel of a start that far from the grid.
+      slack = end_slack >= 0.0 ? end_slack : std::max(0.0, slack - collision_.travelBound(motion));
+    }
     if (!collision_.motionFreeDynamic(s, vel, step, obstacles, t, heading_spread, turning)) return t;
     const Pose2 p = poseAlongArc(s, vel.v_mid, vel.w_mid, step);
     s = UnicycleState{p.x, p.y, p.theta, vel.v_end, vel.w_end};
@@ -134,6 +158,8 @@ double StaaStar::brakeClearTime(const UnicycleState& from, double t0, const Dyna
 
 std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicObstacleSet& obstacles) {
   const double c0 = std::cos(start.theta), s0 = std::sin(start.theta);
+  double start_slack = 0.0;
+  if (!collision_.fastPoseFreeStatic({start.x, start.y, c0, s0}, &start_slack)) start_slack = 0.0;
   std::uint8_t best = 0;
   double latest = -1.0;  // among tier-0 actions: the latest time a collision begins
   for (std::size_t a = 0; a < actions_.size(); ++a) {
@@ -143,15 +169,19 @@ std::uint8_t StaaStar::markBrakeSafe(const UnicycleState& start, const DynamicOb
     const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, vel.w_end};
     std::uint8_t tier = 0;
     double clear = 0.0;  // the action itself collides
-    if (collision_.motionFreeStatic(motion) && collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0)) {
-      clear = brakeClearTime(child, config_.dt, braking_obstacles_, true, 0.0, config_.predict_turning);
+    double child_slack = -1.0;
+    if (collision_.motionFreeStatic(motion, start_slack, &child_slack) &&
+        collision_.motionFreeDynamic(start, vel, config_.dt, obstacles, 0.0)) {
+      if (child_slack < 0.0) child_slack = std::max(0.0, start_slack - collision_.travelBound(motion));
+      clear = brakeClearTime(child, config_.dt, braking_obstacles_, true, 0.0, config_.predict_turning, child_slack);
       if (std::isinf(clear)) {
         tier = 1;
-        // Passive safety: the same stop against the obstacles at constant velocity.
+        // Passive safety: the same stop against the obstacles at constant velocity (the map
+        // along it was just found clear).
         if (config_.passive_safety &&
             (obstacles.size() == 0 ||
              std::isinf(brakeClearTime(child, config_.dt, obstacles, false, config_.passive_heading_spread,
-                                       config_.predict_turning)))) {
+                                       config_.predict_turning, 0.0, false)))) {
           tier = 2;
         }
       }
@@ -205,10 +235,13 @@ void StaaStar::beginSearch(const UnicycleState& start, const LocalMap& map, cons
   nodes_.clear();
   queue_.clear();
   trajectory_.clear();
-  if (++generation_ == 0) {
+  if (closed_overflow_) {
     std::fill(closed_.begin(), closed_.end(), 0);
-    generation_ = 1;
+    closed_overflow_ = false;
+  } else {
+    for (const std::uint32_t w : closed_words_) closed_[w] = 0;
   }
+  closed_words_.clear();
   Node root;
   root.s = start;
   root.h = heuristic_.evaluate(start, 0);
@@ -238,24 +271,35 @@ void StaaStar::evaluateLazily(std::int32_t id, std::int32_t& best, PlanStats& st
 }
 
 void StaaStar::rotationsFor(const UnicycleState& s) {
-  for (std::size_t j = 0; j < actions_.notches(); ++j) {
+  const std::size_t notches = actions_.notches();
+  for (std::size_t j = 0; j < notches; ++j) {
     const ArcVelocities av = arcVelocities(s, actions_[j], config_.dt, limits_);
     rot_w_end_[j] = av.w_end;
     rot_w_mid_[j] = av.w_mid;
     sinCos(av.w_mid * config_.dt, rot_c_[j], rot_s_[j]);
+    // The linear velocities of the actions with linear acceleration index j (arcVelocities
+    // clamps v and w apart, so these are its values for every action of that row).
+    const ArcVelocities lin = arcVelocities(s, actions_[j * notches], config_.dt, limits_);
+    lin_v_end_[j] = lin.v_end;
+    lin_v_mid_[j] = lin.v_mid;
   }
 }
 
 bool StaaStar::motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
-                          const DynamicObstacleSet& obstacles, bool predict, PlanStats& st) const {
+                          const DynamicObstacleSet& obstacles, bool predict, double disc, double& end_slack,
+                          PlanStats& st) const {
   const double t0 = node.depth * config_.dt;
   const std::int64_t tc = now();
-  bool free = config_.check_swept ? collision_.motionFreeStatic(motion)
+  end_slack = -1.0;
+  bool free = config_.check_swept ? collision_.motionFreeStatic(motion, node.slack, &end_slack, disc)
                                   : collision_.fastPoseFreeStatic({motion.x1, motion.y1, motion.c1, motion.s1});
   if (free && predict) {
     const Pose2 end{motion.x1, motion.y1, motion.theta1};
-    free = config_.check_swept ? collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0)
-                               : collision_.poseFreeDynamic(end, obstacles, t0 + config_.dt);
+    if (!config_.check_swept) {
+      free = collision_.poseFreeDynamic(end, obstacles, t0 + config_.dt);
+    } else {
+      free = collision_.motionFreeDynamic(node.s, vel, config_.dt, obstacles, t0, near_);
+    }
   }
   if (timing_) st.collision_ns += now() - tc;
   return free;
@@ -267,7 +311,9 @@ double StaaStar::pathCost(const UnicycleState& child, int depth, const DynamicOb
   const double t = depth * config_.dt;
   double g = t + config_.w_static * map_->cost(child.position());
   if (predict && obstacles.size() > 0) {
-    const double dist = collision_.distanceToDynamic(child.position(), obstacles, t);
+    // Edges beyond the proximity range add nothing: they are not measured.
+    const double beyond = config_.proximity_range_m > 0.0 ? config_.proximity_range_m : std::numeric_limits<double>::infinity();
+    const double dist = collision_.distanceToDynamic(child.position(), obstacles, t, beyond);
     g += config_.w_dynamic * std::max(1.0 - dist / config_.proximity_range_m, 0.0);
   }
   return g;
@@ -275,7 +321,7 @@ double StaaStar::pathCost(const UnicycleState& child, int depth, const DynamicOb
 
 void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st) {
   ++st.expansions;
-  const Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool is appended below
+  Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool is appended below
   const int depth = node.depth + 1;
   const bool predict = depth <= config_.prediction_depth;
   const bool restrict_root = config_.brake_safety && id == 0;
@@ -284,25 +330,46 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
   const std::size_t notches = actions_.notches();
   const double c0 = std::cos(node.s.theta), s0 = std::sin(node.s.theta);
   rotationsFor(node.s);
+  if (node.slack < 0.0 && config_.check_swept) {
+    // The pose's clearance, for the swept checks of its 49 motions (not looked up when the
+    // node was generated: its motion lay within its parent's clearance).
+    const std::int64_t tc = now();
+    double slack = 0.0;
+    if (!collision_.fastPoseFreeStatic({node.s.x, node.s.y, c0, s0}, &slack)) slack = 0.0;
+    node.slack = slack;
+    nodes_[static_cast<std::size_t>(id)].slack = slack;
+    if (timing_) st.collision_ns += now() - tc;
+  }
+  // The pose's clearance in any heading: motions whose origin stays within it are free.
+  const double disc = config_.check_swept ? collision_.discSlack(node.s.x, node.s.y) : 0.0;
+  // The moving obstacles these motions can come near: the others are not checked per sample.
+  near_ = {};
+  if (predict && config_.check_swept && obstacles.size() > 0) {
+    const double v_lo = 0.5 * (node.s.v + limits_.v_min), v_hi = 0.5 * (node.s.v + limits_.v_max);
+    const double travel = std::max(std::abs(v_lo), std::abs(v_hi)) * config_.dt;
+    near_ = collision_.nearObstacles(node.s.position(), travel, obstacles, node.depth * config_.dt, config_.dt);
+  }
   for (std::size_t a = 0; a < actions_.size(); ++a) {
     ++st.successors;
     if (restrict_root && !root_allowed_[a]) {
       ++st.collisions;  // could not brake safely after it
       continue;
     }
-    const std::size_t j = a % notches;  // actions are ordered (a index) * notches + (b index)
-    const ArcVelocities vel = arcVelocities(node.s, actions_[a], config_.dt, limits_);
+    const std::size_t i = a / notches, j = a % notches;  // actions are ordered (a index) * notches + (b index)
+    const ArcVelocities vel{lin_v_end_[i], rot_w_end_[j], lin_v_mid_[i], rot_w_mid_[j]};
     const ArcMotion motion = makeArcMotion(node.s, c0, s0, vel.v_mid, rot_w_mid_[j], config_.dt, rot_c_[j], rot_s_[j]);
     const UnicycleState child{motion.x1, motion.y1, motion.theta1, vel.v_end, rot_w_end_[j]};
     std::size_t child_cell = 0;
     if (!closedIndex(child.x, child.y, child.theta, child_cell)) continue;  // outside the local map
-    if (closed_[child_cell] == generation_) continue;                        // checked on push too
-    if (!motionFree(node, motion, vel, obstacles, predict, st)) {
+    if (isClosed(child_cell)) continue;                                      // checked on push too
+    double end_slack = -1.0;
+    if (!motionFree(node, motion, vel, obstacles, predict, disc, end_slack, st)) {
       ++st.collisions;
       continue;
     }
     if (nodes_.size() == nodes_.capacity()) break;  // pool full: no more pushes
     Node c;
+    c.slack = end_slack;
     c.evaluated = !config_.lazy_heuristic;
     c.s = child;
     c.g = pathCost(child, depth, obstacles, predict);
@@ -380,7 +447,7 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
       // closed meanwhile is dropped unevaluated; otherwise its true h is computed now and it
       // goes back into the queue under its true f (not counted as a pop: the paper's pop is
       // the one that closes or drops it).
-      if (in_box && closed_[cell] == generation_) {
+      if (in_box && isClosed(cell)) {
         ++st.pops;
       } else {
         evaluateLazily(id, best, st);
@@ -389,8 +456,8 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     }
     ++st.pops;
     if (in_box) {
-      if (closed_[cell] == generation_) continue;  // its cell was closed by an earlier pop
-      closed_[cell] = generation_;
+      if (isClosed(cell)) continue;  // its cell was closed by an earlier pop
+      close(cell);
     }
     if (n.h < config_.finish_h) {
       best = id;

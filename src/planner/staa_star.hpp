@@ -26,11 +26,11 @@ namespace staa {
 struct StaaConfig {
   std::size_t notches = 7;          // Eq. (1): n, 49 actions
   double dt = 0.3;                  // prediction time per step (s)
-  // A slow robot (the HSR: 0.5 m/s^2, 1.5 rad/s^2) moves less than a closed-table cell in
+  // A slow robot (the HSR: 0.3 m/s^2, 0.5 rad/s^2) moves less than a closed-table cell in
   // 0.3 s from standstill, and the search cannot tell its first steps apart: dt is raised to
   // the time the robot needs to cross a cell at full acceleration,
   // max(dt, sqrt(2 closed_xy_m / a_max), sqrt(2 closed_theta_rad / b_max)). The paper's
-  // agent (2 m/s^2, 6 rad/s^2) keeps 0.3 s; the HSR gets 0.45 s.
+  // agent (2 m/s^2, 6 rad/s^2) keeps 0.3 s; the HSR gets 0.63 s.
   bool adapt_dt = true;
   double closed_xy_m = 0.05;        // closed table: cell size ...
   double closed_theta_rad = 0.1;    // ... and heading resolution
@@ -152,6 +152,9 @@ class StaaStar {
     std::uint16_t depth = 0;
     std::uint8_t action = 0;
     bool evaluated = true;  // h is the true heuristic (false: a lower bound, lazy mode)
+    // How far every point of the robot may move from this pose without touching the grid
+    // (CollisionChecker::fastPoseFreeStatic's slack); -1 until looked up.
+    double slack = -1.0;
   };
   struct QueueEntry {
     double f;
@@ -164,9 +167,11 @@ class StaaStar {
   // obstacle has stopped: +infinity when it stays free of the map and of `obstacles`, else the
   // time (from the plan's start, to a brake step) at which it first touches something.
   // With `stand` false only the braking is checked. heading_spread and turning: as
-  // CollisionChecker::poseFreeDynamic.
+  // CollisionChecker::poseFreeDynamic. `start_slack`: the clearance of `s` from the grid when
+  // known (0: not known); `check_static` false when this stop is known clear of the grid.
   double brakeClearTime(const UnicycleState& s, double t0, const DynamicObstacleSet& obstacles, bool stand,
-                        double heading_spread = 0.0, bool turning = false) const;
+                        double heading_spread = 0.0, bool turning = false, double start_slack = 0.0,
+                        bool check_static = true) const;
   // Fills root_ok_ with each first action's tier (0..2) from `start`, root_clear_ and
   // root_allowed_ (the best tier's actions, or the least bad ones); returns the best tier any
   // action reached (braking_obstacles_ must hold this cycle's copy).
@@ -175,7 +180,7 @@ class StaaStar {
   std::int32_t pop();
   // plan()'s steps: the box, collision grid, heuristic and the root; the first actions'
   // braking check; a lazily queued state's true h; one expansion (its successors, their
-  // rotations, collision check and cost g); the result from the best state.
+  // velocities and rotations, collision check and cost g); the result from the best state.
   void beginSearch(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
                    const Deadline& deadline);
   void restrictRoot(const UnicycleState& start, const DynamicObstacleSet& obstacles, PlanResult& result);
@@ -183,7 +188,8 @@ class StaaStar {
   void expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st);
   void rotationsFor(const UnicycleState& s);
   bool motionFree(const Node& node, const ArcMotion& motion, const ArcVelocities& vel,
-                  const DynamicObstacleSet& obstacles, bool predict, PlanStats& st) const;
+                  const DynamicObstacleSet& obstacles, bool predict, double disc, double& end_slack,
+                  PlanStats& st) const;
   double pathCost(const UnicycleState& child, int depth, const DynamicObstacleSet& obstacles, bool predict) const;
   void finish(const UnicycleState& start, std::int32_t best, PlanResult& result);
   // The phase timing's clock reading (the budget's clock), 0 while timing is off.
@@ -197,16 +203,23 @@ class StaaStar {
   const LocalMap* map_ = nullptr;
   std::vector<Node> nodes_;
   std::vector<QueueEntry> queue_;
-  std::vector<std::uint32_t> closed_;  // generation stamps over (x, y, theta) cells
-  std::uint32_t generation_ = 0;
+  // The closed table: one bit per (x, y, theta) cell, the headings of one (x, y) cell next to
+  // each other (a node's 49 successors touch a few words of a 200 KB table, not 49 cache lines
+  // of 6 MB), and the words this plan set, cleared before the next one.
+  std::vector<std::uint64_t> closed_;
+  std::vector<std::uint32_t> closed_words_;
+  bool closed_overflow_ = false;  // more words set than listed: clear the whole table
+  bool isClosed(std::size_t cell) const { return ((closed_[cell >> 6] >> (cell & 63)) & 1U) != 0; }
+  void close(std::size_t cell);
   int closed_w_ = 0, closed_h_ = 0, closed_t_ = 0;
   double inv_closed_xy_ = 20.0, inv_two_pi_ = 0.0;
   // This cycle's box (the closed table's frame), rounded as it always was here (see
   // CollisionChecker::prepare on why not LocalMap::frameAt).
   double box_x_ = 0.0, box_y_ = 0.0, box_c_ = 1.0, box_s_ = 0.0, box_behind_ = 0.0, box_side_ = 0.0;
   // Per expansion: for each angular acceleration, the end and mid angular velocities and the
-  // cosine and sine of the rotation over dt.
+  // cosine and sine of the rotation over dt; for each linear one, the end and mid velocities.
   std::array<double, ActionSet::kMaxNotches> rot_w_end_{}, rot_w_mid_{}, rot_c_{}, rot_s_{};
+  std::array<double, ActionSet::kMaxNotches> lin_v_end_{}, lin_v_mid_{};
   std::vector<UnicycleState> trajectory_;
   // Braking safety: the obstacles under the braking hypothesis (a copy per plan, no
   // allocation) and which first actions passed.
@@ -214,6 +227,9 @@ class StaaStar {
   std::vector<std::uint8_t> root_ok_;
   std::vector<double> root_clear_;           // brakeClearTime after each first action (0: it collides itself)
   std::vector<std::uint8_t> root_allowed_;   // the first actions the search may take
+  // Per expansion: the moving obstacles its motions can come near (CollisionChecker::
+  // nearObstacles).
+  CollisionChecker::NearObstacles near_;
   bool timing_ = false;
   ClockFn clock_ = &steadyClockNs;  // the current plan's budget's clock
 };

@@ -24,6 +24,8 @@ void visitControlConfig(C& c, V&& v) {
   v("local_inflation_m", c.local_inflation_m);
   v("max_moving_obstacles", c.max_moving_obstacles);
   v("path_hold_s", c.path_hold_s);
+  v("passages", c.passages);
+  v("passage_margin_m", c.passage_margin_m);
   auto& s = c.staa;
   v("staa.notches", s.notches);
   v("staa.dt", s.dt);
@@ -65,6 +67,10 @@ void visitControlConfig(C& c, V&& v) {
   v("path.inflation_radius_m", p.inflation_radius_m);
   v("path.arc_tolerance_m", p.arc_tolerance_m);
   v("path.nudge_start", p.nudge_start);
+  v("path.passage_inflation_m", p.passage_inflation_m);
+  v("path.passage_arc_tolerance_m", p.passage_arc_tolerance_m);
+  v("path.band_cost", p.band_cost);
+  v("path.route_hysteresis_m", p.route_hysteresis_m);
   v("path.search.grid_cell_m", p.search.grid_cell_m);
   v("path.search.max_dynamic_polygons", p.search.max_dynamic_polygons);
   v("path.search.max_dynamic_vertices", p.search.max_dynamic_vertices);

@@ -278,7 +278,8 @@ std::size_t encodeCycle(const CycleView& v, const RecordLimits& limits, std::spa
   w.u8(v.memory.goal.has_value() ? 1 : 0);
   w.u8(static_cast<std::uint8_t>(v.memory.state));
   w.u8(v.memory.held_valid ? 1 : 0);
-  w.u8(0);
+  w.u8(static_cast<std::uint8_t>((v.memory.held_passage ? 1 : 0) | (v.memory.route_chosen ? 2 : 0) |
+                                 (v.memory.route_in_passage ? 4 : 0)));
   w.i32(v.memory.path_misses);
   w.pose(v.memory.goal.value_or(Pose2{}));
   w.state(v.robot);
@@ -348,7 +349,7 @@ CycleRecord decodeCycle(std::span<const std::byte> data, const std::string& wher
   c.has_goal = r.u8("memory.has_goal") != 0;
   c.state = enumIn<CycleState>(r.u8("memory.state"), 3, "memory.state", where);
   c.held_valid = r.u8("memory.held_valid") != 0;
-  r.u8("reserved");
+  c.route_bits = r.u8("memory.route");
   c.path_misses = r.i32("memory.path_misses");
   c.goal = r.pose("memory.goal");
   c.robot = r.state("robot");
@@ -427,6 +428,9 @@ ControlCycle::Memory CycleRecord::memory() const {
   m.state = state;
   m.held_valid = held_valid;
   m.path_misses = path_misses;
+  m.held_passage = (route_bits & 1) != 0;
+  m.route_chosen = (route_bits & 2) != 0;
+  m.route_in_passage = (route_bits & 4) != 0;
   m.held_path = held_path;
   return m;
 }

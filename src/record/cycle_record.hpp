@@ -143,6 +143,9 @@ struct CycleRecord {
   Pose2 goal;
   CycleState state = CycleState::kIdle;
   bool held_valid = false;
+  // The byte after held_valid: bit 0 the held path runs in M'', bit 1 a route was chosen
+  // for the goal, bit 2 in M'' (Memory::held_passage, route_chosen, route_in_passage).
+  std::uint8_t route_bits = 0;
   std::int32_t path_misses = 0;
   Polygon held_path;  // with kHeldPath
   UnicycleState robot;

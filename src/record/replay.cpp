@@ -91,6 +91,11 @@ std::string memoryDifference(const ControlCycle::Memory& replayed, const CycleRe
   if (replayed.path_misses != r.path_misses) {
     return "memory: path misses " + std::to_string(r.path_misses) + " vs " + std::to_string(replayed.path_misses);
   }
+  const ControlCycle::Memory recorded = r.memory();
+  if (replayed.held_passage != recorded.held_passage || replayed.route_chosen != recorded.route_chosen ||
+      replayed.route_in_passage != recorded.route_in_passage) {
+    return "memory: another route choice between M' and M'' (or a held path in another map)";
+  }
   return {};
 }
 

@@ -85,6 +85,8 @@ double RobotProfile::circumradius() const {
   return r;
 }
 
+double RobotProfile::inscribedRadius() const { return distanceToEdges(Vec2::Zero(), footprint); }
+
 RobotProfile parseRobotProfile(const std::string& yaml_text, const std::string& source) {
   return io::readAs<ProfileError>(source, [&] {
     const io::ConfigDocument doc = io::ConfigDocument::parse(yaml_text, source);

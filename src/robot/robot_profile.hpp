@@ -5,6 +5,7 @@
 #include "geometry/types.hpp"
 #include "io/config_rules.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -64,6 +65,17 @@ struct RobotProfile {
   // Radius of the smallest circle about the robot's origin that holds the footprint: the
   // least inflation of the map for the global path.
   double circumradius() const;
+  // Radius of the largest circle about the robot's origin inside the footprint (the nearest
+  // edge's distance): an obstacle closer to the origin than this touches the robot in every
+  // heading, so no passage narrower than twice it can be driven (issue 16).
+  double inscribedRadius() const;
+  // The growth of the map a route for this footprint may use (issue 16, the passage map):
+  // the inscribed radius plus `margin`, at most the circumradius (a round robot: its M').
+  double passageRadius(double margin = kDefaultPassageMargin) const {
+    return std::min(inscribedRadius() + margin, circumradius());
+  }
+  // The default margin: a 0.5 m wide robot's route passes slots from about 0.54 m.
+  static constexpr double kDefaultPassageMargin = 0.01;
 };
 
 class ProfileError : public io::ConfigError {

@@ -16,6 +16,8 @@ namespace {
 constexpr const char* kObstacle = "#3d3d3d";
 constexpr const char* kInflated = "#7fa7d9";
 constexpr double kInflatedOpacity = 0.45;
+constexpr const char* kPassage = "#3b6fb0";
+constexpr double kPassageOpacity = 0.5;
 constexpr const char* kGrid = "#e6e6e6";
 constexpr const char* kBounds = "#1f1f1f";
 constexpr const char* kGoal = "#2b8a3e";
@@ -74,7 +76,8 @@ SvgCanvas makeMapCanvas(const PolygonMap& map, double px_per_m) {
   return SvgCanvas(mapDrawingBox(map), options);
 }
 
-void drawMap(SvgCanvas& canvas, const PolygonMap& map, const std::vector<Polygon>* inflated) {
+void drawMap(SvgCanvas& canvas, const PolygonMap& map, const std::vector<Polygon>* inflated,
+             const std::vector<Polygon>* passage) {
   const Box& world = canvas.world();
 
   // Metre grid: a quiet reference for reading positions off the picture.
@@ -92,6 +95,11 @@ void drawMap(SvgCanvas& canvas, const PolygonMap& map, const std::vector<Polygon
   if (inflated != nullptr && !inflated->empty()) {
     canvas.beginGroup({}, /*clip_to_world=*/true);
     canvas.polygons(*inflated, svgFill(kInflated, kInflatedOpacity));
+    canvas.endGroup();
+  }
+  if (passage != nullptr && !passage->empty()) {
+    canvas.beginGroup({}, /*clip_to_world=*/true);
+    canvas.polygons(*passage, svgFill(kPassage, kPassageOpacity));
     canvas.endGroup();
   }
 
@@ -125,10 +133,11 @@ void drawPath(SvgCanvas& canvas, std::span<const Vec2> path, const Vec2& start, 
   canvas.marker(goal, 7.0, endpointStyle(kEnd));
 }
 
-std::vector<LegendEntry> mapLegend(bool with_inflated, bool with_goals, bool with_path) {
+std::vector<LegendEntry> mapLegend(bool with_inflated, bool with_goals, bool with_path, bool with_passage) {
   std::vector<LegendEntry> rows;
   rows.push_back({"obstacle", svgFill(kObstacle), LegendSymbol::kArea});
   if (with_inflated) rows.push_back({"inflated", svgFill(kInflated, kInflatedOpacity), LegendSymbol::kArea});
+  if (with_passage) rows.push_back({"passage map", svgFill(kPassage, kPassageOpacity), LegendSymbol::kArea});
   if (with_goals) rows.push_back({"goal (index)", goalStyle(), LegendSymbol::kMarker});
   if (with_path) {
     rows.push_back({"path", svgStroke(kPath, 3.2), LegendSymbol::kLine});

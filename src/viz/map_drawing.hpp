@@ -25,15 +25,17 @@ double autoScale(const Box& world, double target_px = 900.0);
 SvgCanvas makeMapCanvas(const PolygonMap& map, double px_per_m);
 
 // Grid lines every metre (only when they are at least 8 px apart), the inflated obstacles
-// (when given; clipped to the drawing box, since bounds walls extend beyond it), the
+// (when given; clipped to the drawing box, since bounds walls extend beyond it), over them the
+// passage map M'' (when given: the obstacles grown by the footprint's inscribed radius), the
 // obstacles, the bounds and the goals numbered from 0 in the map's order.
-void drawMap(SvgCanvas& canvas, const PolygonMap& map, const std::vector<Polygon>* inflated);
+void drawMap(SvgCanvas& canvas, const PolygonMap& map, const std::vector<Polygon>* inflated,
+             const std::vector<Polygon>* passage = nullptr);
 
 // A path as one polyline with round joins, then start and goal markers. `start` and `goal`
 // are the requested points (drawn even when the path is empty, i.e. no path was found).
 void drawPath(SvgCanvas& canvas, std::span<const Vec2> path, const Vec2& start, const Vec2& goal);
 
 // The legend rows that match what drawMap and drawPath drew.
-std::vector<LegendEntry> mapLegend(bool with_inflated, bool with_goals, bool with_path);
+std::vector<LegendEntry> mapLegend(bool with_inflated, bool with_goals, bool with_path, bool with_passage = false);
 
 }  // namespace staa

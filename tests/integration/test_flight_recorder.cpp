@@ -252,6 +252,20 @@ TEST_F(FlightRecorder, ADepthRunRecordsWhatPerceptionGaveThePlannersAndReplaysBi
   EXPECT_GT(limited, 0u) << "the camera's speed limit held some command";
 }
 
+// Issue 16: a rectangular robot whose route runs in the passage map M'' (the building's doors,
+// narrowed by furniture below what M' leaves open) carries the route choice between M' and M''
+// from cycle to cycle; the replay compares it with the recorded memory every cycle.
+TEST_F(FlightRecorder, ARouteThroughThePassageMapReplaysBitForBit) {
+  const fs::path file = dir_ / "passages.mcap";
+  const fs::path docs = staa::test::sourceDir() / "docs/results/passages";
+  const ToolRun sim = runTool({STAA_SIM_EXE, "--map", (docs / "building.yaml").string(), "--robot", (docs / "amr.yaml").string(),
+                           "--start", "1.5,2,0", "--goal", "14.5,2,0", "--budget-ms", "5", "--duration", "6", "--quiet",
+                           "--record", file.string()},
+                          dir_, "sim");
+  ASSERT_EQ(sim.code, std::optional<int>(0)) << sim.err;
+  expectAllIdentical(runTool({STAA_REPLAY_EXE, file.string(), "--check"}, dir_, "check"), 170, "passages");
+}
+
 TEST_F(FlightRecorder, StaaReplayRefusesTruncatedOtherVersionAlteredAndUnknownInputWithExit2) {
   const fs::path file = dir_ / "run.mcap";
   ASSERT_EQ(runTool({STAA_SIM_EXE, "--map", (staa::test::sourceDir() / "config/maps/office.yaml").string(), "--agents",

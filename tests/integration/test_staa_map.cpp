@@ -188,6 +188,45 @@ TEST_F(StaaMapTool, DoorNarrowerThanTwiceTheInflationClosesTheRoom) {
   EXPECT_TRUE(closed["path"].empty());
 }
 
+// Issue 16: with --robot the route is planned as the control cycle plans it. The building's
+// doors, narrowed to 0.75-0.8 m, are closed in M' (the 0.5 x 0.65 m robot's circumradius,
+// 0.41 m) and open in the passage map (its inscribed radius + 1 cm).
+TEST_F(StaaMapTool, RobotPlansThroughPassagesTheCircumradiusCloses) {
+  const std::string map = (fs::path(STAA_SOURCE_DIR) / "docs/results/passages/building.yaml").string();
+  const std::string robot = (fs::path(STAA_SOURCE_DIR) / "docs/results/passages/amr.yaml").string();
+  const RunResult wide = run({"path", map, "--from", "1.5,2", "--to", "14.5,2", "--inflate", "0.41", "--json"});
+  ASSERT_EQ(wide.exit_code, 0) << wide.err;
+  EXPECT_EQ(nlohmann::json::parse(wide.out)["status"], "no path");
+  const RunResult r = run({"path", map, "--from", "1.5,2", "--to", "14.5,2", "--robot", robot, "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j["found"].get<bool>()) << r.out;
+  EXPECT_TRUE(j["passage"].get<bool>());
+  EXPECT_NEAR(j["inflate_m"].get<double>(), std::hypot(0.325, 0.25), 1e-12);
+  EXPECT_NEAR(j["passage_inflate_m"].get<double>(), 0.26, 1e-12);
+  EXPECT_GT(j["band_m"].get<double>(), 1.0);  // three doors
+  EXPECT_LT(j["length"].get<double>(), 13.5);
+  // A slot narrower than the robot: the footprint's reason.
+  std::ofstream(path("slot.yaml")) << "format: staa-polygon-map/1\nname: slot\nbounds: [0, 0, 8, 4]\nobstacles:\n"
+                                      "  - [[3.9, 0], [4.1, 0], [4.1, 1.8], [3.9, 1.8]]\n"
+                                      "  - [[3.9, 2.2], [4.1, 2.2], [4.1, 4], [3.9, 4]]\n";
+  const RunResult slot = run({"path", path("slot.yaml").string(), "--from", "1,2", "--to", "7,2", "--robot", robot, "--json"});
+  ASSERT_EQ(slot.exit_code, 0) << slot.err;
+  EXPECT_EQ(nlohmann::json::parse(slot.out)["status"], "no passage wider than the footprint");
+  // --robot and --inflate exclude each other; a bad profile is named.
+  const RunResult both = run({"path", map, "--from", "1.5,2", "--to", "14.5,2", "--robot", robot, "--inflate", "0.3"});
+  EXPECT_EQ(both.exit_code, 2);
+  const RunResult missing = run({"path", map, "--from", "1.5,2", "--to", "14.5,2", "--robot", path("none.yaml").string()});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("none.yaml"), std::string::npos) << missing.err;
+  // The picture shows both maps.
+  const RunResult svg = run({"svg", map, "-o", path("b.svg").string(), "--from", "1.5,2", "--to", "14.5,2", "--robot", robot});
+  ASSERT_EQ(svg.exit_code, 0) << svg.err;
+  const std::string text = test::readFile(path("b.svg"));
+  EXPECT_NE(text.find("passage map"), std::string::npos);
+  EXPECT_NE(text.find("through M&apos;&apos;"), std::string::npos);
+}
+
 TEST_F(StaaMapTool, GoalInsideAWallIsAnAnswerNotAnError) {
   // x = 3.06 lies in the 0.12 m wall between rooms 0 and 1.
   const RunResult r = run({"path", office().string(), "--from", "4.5,4.5", "--to", "3.06,1.5", "--json"});

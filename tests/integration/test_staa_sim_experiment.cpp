@@ -58,6 +58,7 @@ TEST(StaaSimExperiment, SmallExperimentExitsZeroWithResultsAndFigure) {
   const Json doc = Json::parse(readFile(dir / "out" / "results.json"));
   EXPECT_EQ(doc["runs"].size(), 2U);
   EXPECT_EQ(doc["spec"]["predict_turning"], StaaConfig{}.predict_turning);  // the default, recorded
+  EXPECT_EQ(doc["spec"]["lazy_heuristic"], StaaConfig{}.lazy_heuristic);
   EXPECT_TRUE(fs::exists(dir / "out" / "scores.svg"));
   EXPECT_THAT(e.out, HasSubstr("clutter"));
   EXPECT_THAT(e.out, HasSubstr("score"));
@@ -96,7 +97,8 @@ TEST(StaaSimExperiment, BadInputExitsTwoNamingTheOptionAndValue) {
                                          {"--jobs 0", "--jobs", "'0'"},
                                          {"--maps clutter,no-such-map.yaml", "--maps", "no-such-map.yaml"},
                                          {"--budget-ms 5 --budget-expansions 100", "--budget-ms", "exclude"},
-                                         {"--predict-turning yes", "--predict-turning", "'yes'"}}) {
+                                         {"--predict-turning yes", "--predict-turning", "'yes'"},
+                                         {"--lazy-heuristic 1", "--lazy-heuristic", "'1'"}}) {
     const Exit e = runSim("experiment " + c.args + out, dir);
     EXPECT_EQ(e.code, 2) << c.args << ": " << e.err;
     EXPECT_THAT(e.err, HasSubstr(c.option)) << c.args;

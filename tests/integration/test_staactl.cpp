@@ -201,6 +201,7 @@ class Staactl : public ::testing::Test {
                                                     : DaemonState::kIdle;
     s.has_goal = true;
     s.goal = {12.0, 4.5, 1.57};
+    if (s.state == DaemonState::kUnreachable) s.reason = "no passage wider than the footprint";
     return statusReply(s, 0);
   }
 
@@ -260,7 +261,7 @@ TEST_F(Staactl, GoalWaitFailsWhenItsOwnGoalIsUnreachableStoppedOrReplaced) {
     FakeStaad staad(socket_, {goalReply(3), statusWith("unreachable", 2, 3), statusWith("unreachable", 3)});
     const CtlRun r = ctl({"--socket", socket_.string(), "goal", "3", "4.5", "--wait"});
     EXPECT_EQ(r.exit_code, 1);
-    EXPECT_THAT(r.err, HasSubstr("goal 3 is unreachable"));
+    EXPECT_THAT(r.err, HasSubstr("goal 3 is unreachable: no passage wider than the footprint"));
     EXPECT_EQ(staad.requests().size(), 3u);
   }
   fs::remove(socket_);

@@ -5,12 +5,18 @@
 
 import json
 import os
+import re
 import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 # Two cheap workloads: the verdict is the same arithmetic for every workload.
 WORKLOADS = ["can.codec_round", "local.update"]
+
+
+def ratio_of(line):
+    m = re.search(r"ratio (\d+\.\d+)", line)
+    return float(m.group(1)) if m else 0.0
 
 
 def cost_low_baseline(baseline, out):
@@ -35,7 +41,9 @@ def cost_low_baseline(baseline, out):
         errors.append(f"exit {proc.returncode}, expected 1")
     for w in WORKLOADS:
         lines = [l for l in proc.stderr.splitlines() if l.startswith(f"cost: {w}: ")]
-        if not any("ratio 1.25" in l and "baseline" in l for l in lines):
+        # 1/0.8 = 1.25 of the baseline's own count; a checkout at another path, or a change
+        # within the gate's 3 %, counts a little differently (1.249 for 0.05 % fewer).
+        if not any("baseline" in l and 1.24 <= ratio_of(l) <= 1.26 for l in lines):
             errors.append(f"no failed-gate line for {w} naming the baseline and ratio 1.25 (got {lines})")
     with open(os.path.join(out, "report.json"), encoding="utf-8") as f:
         report = json.load(f)

@@ -12,6 +12,7 @@
 #include "map/polygon_map.hpp"
 #include "map/ros_import.hpp"
 #include "path/global_path.hpp"
+#include "robot/robot_profile.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
 
@@ -281,6 +282,13 @@ int runPath(const std::string& map_file, const Vec2& from, const Vec2& to, const
     j["edge_checks"] = result.edge_checks;
     j["build_us"] = build_us;
     j["inflate_m"] = options.inflation_radius_m;
+    if (options.passage_inflation_m > 0.0) {
+      // For a footprint (--robot): the passage map's growth, whether the route runs in it,
+      // and the route's length in the band (inside M').
+      j["passage_inflate_m"] = options.passage_inflation_m;
+      j["passage"] = result.passage;
+      j["band_m"] = found ? planner.bandLength(result.path) : 0.0;
+    }
     printJson(j);
     return 0;
   }
@@ -289,7 +297,10 @@ int runPath(const std::string& map_file, const Vec2& from, const Vec2& to, const
               << " m, " << result.path.size() << " vertices, query " << fmt(time_us, 1) << " us (build "
               << fmt(build_us, 1) << " us, " << result.expansions << " expansions, " << result.edge_checks
               << " edge checks" << (result.start_moved ? ", start moved" : "")
-              << (result.goal_moved ? ", goal moved" : "") << ")\n";
+              << (result.goal_moved ? ", goal moved" : "")
+              << (result.passage ? ", through a passage M' closes: " + fmt(planner.bandLength(result.path), 2) + " m in the band"
+                                 : std::string())
+              << ")\n";
   } else {
     std::cout << "no path " << fmtPoint(from) << " -> " << fmtPoint(to) << ": " << staa::toString(result.status)
               << " (inflate " << fmt(options.inflation_radius_m, 2) << " m, query " << fmt(time_us, 1) << " us)\n";
@@ -300,7 +311,7 @@ int runPath(const std::string& map_file, const Vec2& from, const Vec2& to, const
 // ---- svg ----
 
 struct SvgArgs {
-  std::string map_file, out_file, from_text, to_text;
+  std::string map_file, out_file, from_text, to_text, robot_file;
   staa::GlobalPathOptions options;
   double scale = 0.0;
   const CLI::Option* scale_option = nullptr;
@@ -315,9 +326,11 @@ int runSvg(const SvgArgs& a) {
 
   staa::GlobalPathPlanner planner(map, options);
   const bool with_inflated = options.inflation_radius_m > 0.0;
+  const bool with_passage = planner.hasPassageMap();
   const double px_per_m = a.scale_option->count() > 0 ? a.scale : staa::autoScale(staa::mapDrawingBox(map));
   staa::SvgCanvas canvas = staa::makeMapCanvas(map, px_per_m);
-  staa::drawMap(canvas, map, with_inflated ? &planner.inflatedObstacles() : nullptr);
+  staa::drawMap(canvas, map, with_inflated ? &planner.inflatedObstacles() : nullptr,
+                with_passage ? &planner.passageObstacles() : nullptr);
 
   std::string caption = map.name;
   if (with_path) {
@@ -325,16 +338,22 @@ int runSvg(const SvgArgs& a) {
     explainEndpoint(result.status, from, to);
     staa::drawPath(canvas, result.path, from, to);
     caption += result.status == staa::PathStatus::kFound
-                   ? ": path " + fmtPoint(from) + " to " + fmtPoint(to) + ", " + fmt(result.length, 2) + " m"
+                   ? ": path " + fmtPoint(from) + " to " + fmtPoint(to) + ", " + fmt(result.length, 2) + " m" +
+                         (result.passage ? " through M'' (" + fmt(planner.bandLength(result.path), 2) + " m in the band)"
+                                         : std::string())
                    : std::string(": ") + staa::toString(result.status);
     if (result.status != staa::PathStatus::kFound) {
       std::cout << "no path " << fmtPoint(from) << " -> " << fmtPoint(to) << ": " << staa::toString(result.status)
                 << '\n';
     }
   }
-  if (with_inflated) caption += " (inflated " + fmt(options.inflation_radius_m, 2) + " m)";
+  if (with_inflated) {
+    caption += with_passage ? " (M' " + fmt(options.inflation_radius_m, 2) + " m, M'' " +
+                                  fmt(options.passage_inflation_m, 2) + " m)"
+                            : " (inflated " + fmt(options.inflation_radius_m, 2) + " m)";
+  }
   canvas.scaleBar();
-  const auto legend = staa::mapLegend(with_inflated, !map.goals.empty(), with_path);
+  const auto legend = staa::mapLegend(with_inflated, !map.goals.empty(), with_path, with_passage);
   canvas.legend(legend);
   canvas.title(caption);
   canvas.save(a.out_file);
@@ -427,7 +446,7 @@ CLI::App* addGoals(CLI::App& app, GoalsArgs& a) {
 }
 
 struct PathArgs {
-  std::string map_file, from_text, to_text;
+  std::string map_file, from_text, to_text, robot_file;
   staa::GlobalPathOptions options;
   bool json = false;
 };
@@ -445,12 +464,18 @@ CLI::App* addPath(CLI::App& app, PathArgs& a) {
       ->required()
       ->check(cli::point<2>(kPointForm))
       ->type_name("X,Y");
-  path->add_option("--inflate", a.options.inflation_radius_m, "Inflation radius in metres (the robot's radius)")
-      ->transform(cli::nonNegative("a radius in metres"))
-      ->capture_default_str();
+  auto* inflate = path->add_option("--inflate", a.options.inflation_radius_m, "Inflation radius in metres (the robot's radius)")
+                      ->transform(cli::nonNegative("a radius in metres"))
+                      ->capture_default_str();
+  path->add_option("--robot", a.robot_file,
+                   "Robot profile (staa-robot/1): plan as the control cycle does, in the map grown by the footprint's "
+                   "circumradius and in the passage map grown by its inscribed radius + 1 cm")
+      ->excludes(inflate);
   path->add_flag("--json", a.json,
                  "Print {\"found\", \"length\", \"path\", \"time_us\", \"status\", \"start_moved\", \"goal_moved\", "
-                 "\"expansions\", \"edge_checks\", \"build_us\", \"inflate_m\"}; time_us is the query alone");
+                 "\"expansions\", \"edge_checks\", \"build_us\", \"inflate_m\"}, with --robot also \"passage_inflate_m\", "
+                 "\"passage\" (the route runs through a passage the circumradius closes) and \"band_m\" (its length "
+                 "there); time_us is the query alone");
   return path;
 }
 
@@ -468,13 +493,25 @@ CLI::App* addSvg(staa::cli::CommandLine& cl, SvgArgs& a) {
                  ->type_name("X,Y");
   cl.need(from, to, "a path needs both --from and --to");
   cl.need(to, from, "a path needs both --from and --to");
-  svg->add_option("--inflate", a.options.inflation_radius_m,
-                  "Inflation radius in metres (0: do not draw inflated obstacles)")
-      ->transform(cli::nonNegative("a radius in metres"))
-      ->capture_default_str();
+  auto* inflate = svg->add_option("--inflate", a.options.inflation_radius_m,
+                                  "Inflation radius in metres (0: do not draw inflated obstacles)")
+                      ->transform(cli::nonNegative("a radius in metres"))
+                      ->capture_default_str();
+  svg->add_option("--robot", a.robot_file,
+                  "Robot profile (staa-robot/1): draw M' (its circumradius) and the passage map (its inscribed "
+                  "radius + 1 cm), and plan the path as the control cycle does")
+      ->excludes(inflate);
   a.scale_option = svg->add_option("--scale", a.scale, "Pixels per metre (default: about 900 px across)")
                        ->transform(cli::positive("pixels per metre"));
   return svg;
+}
+
+// --robot: M' grown by the footprint's circumradius, the passage map by its inscribed radius
+// + 1 cm, as the control cycle plans its route.
+void setRobotOptions(const std::string& robot_file, staa::GlobalPathOptions& options) {
+  const staa::RobotProfile robot = staa::loadRobotProfile(robot_file);
+  options.inflation_radius_m = robot.circumradius();
+  options.passage_inflation_m = robot.passageRadius();
 }
 
 // CLI11 reports an unknown subcommand as "a subcommand is required"; name it instead.
@@ -511,8 +548,14 @@ int run(int argc, char** argv) {
   if (*import_cmd) return runImport(import);
   if (*generate_cmd) return runGenerate(generate.name, generate.seed, generate.out_file);
   if (*goals_cmd) return runGoals(goals.map_file, goals.out_file, goals.placement);
-  if (*path_cmd) return runPath(path.map_file, point(path.from_text), point(path.to_text), path.options, path.json);
-  if (*svg_cmd) return runSvg(svg);
+  if (*path_cmd) {
+    if (!path.robot_file.empty()) setRobotOptions(path.robot_file, path.options);
+    return runPath(path.map_file, point(path.from_text), point(path.to_text), path.options, path.json);
+  }
+  if (*svg_cmd) {
+    if (!svg.robot_file.empty()) setRobotOptions(svg.robot_file, svg.options);
+    return runSvg(svg);
+  }
   return kExitBadInput;
 }
 

@@ -136,6 +136,11 @@ void addOptions(cli::CommandLine& cl, Args& a) {
                              "on or off: STAA*'s braking checks also predict turning agents on their circle "
                              "(StaaConfig::predict_turning)"),
               std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, predict_turning);
+  bool& lazy_heuristic = s.control.staa.lazy_heuristic;
+  cli::choice(app.add_option("--lazy-heuristic", lazy_heuristic,
+                             "on or off: STAA* computes h when a state is popped, not when it is generated "
+                             "(StaaConfig::lazy_heuristic)"),
+              std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, lazy_heuristic);
   app.add_option("--seed", s.seed, "Base seed of the runs")
       ->transform(cli::count("a seed", 0, std::numeric_limits<std::uint64_t>::max() - 100000))
       ->capture_default_str();

@@ -171,6 +171,7 @@ Json resultJson(const Request& rq, const staa::SimResult& r) {
   j["path_us"] = distributionJson(r.path_us, false, true);
   j["brakes"] = r.brakes;
   j["final_state"] = r.final_state;
+  j["reason"] = r.reason.empty() ? Json(nullptr) : Json(r.reason);
   j["final_pose"] = Json::array({r.final_pose.x, r.final_pose.y, r.final_pose.theta});
   j["simulated_s"] = r.duration_s;
   j["frames_written"] = r.frames_written;
@@ -182,7 +183,8 @@ std::string summary(const staa::SimResult& r) {
   if (r.reached_goal) {
     s << "reached goal in " << fmt(r.time_to_goal_s) << " s";
   } else {
-    s << "goal not reached after " << fmt(r.duration_s) << " s (state " << r.final_state << ")";
+    s << "goal not reached after " << fmt(r.duration_s) << " s (state " << r.final_state
+      << (r.reason.empty() ? std::string() : ": " + r.reason) << ")";
   }
   s << "; collisions " << r.collisions << "; min clearance "
     << (std::isfinite(r.min_clearance_m) ? fmt(r.min_clearance_m, 3) + " m" : std::string("inf")) << "; planner "

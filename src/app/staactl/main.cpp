@@ -166,6 +166,12 @@ std::string numAt(const Json& j, const char* key, std::size_t i, int decimals) {
   return buf;
 }
 
+// ": REASON" when the status says why the goal is unreachable (staad's `reason`), else "".
+std::string reasonOf(const Json& status) {
+  const auto it = status.find("reason");
+  return it != status.end() && it->is_string() ? ": " + it->get<std::string>() : std::string();
+}
+
 std::string text(const Json& j, const char* key, const char* if_null = "?") {
   const auto it = j.find(key);
   if (it == j.end()) return "?";
@@ -333,8 +339,9 @@ int waitFor(const std::string& socket_path, const WaitTarget& target, double tim
           return kExitOk;
         }
         if (state == "unreachable") {
-          std::cerr << "staactl: goal: goal " << target.goal_id << " is unreachable (state unreachable at ("
-                    << numAt(status, "pose", 0, 2) << ", " << numAt(status, "pose", 1, 2) << "))\n";
+          std::cerr << "staactl: goal: goal " << target.goal_id << " is unreachable" << reasonOf(status)
+                    << " (state unreachable at (" << numAt(status, "pose", 0, 2) << ", " << numAt(status, "pose", 1, 2)
+                    << "))\n";
           return kExitFailed;
         }
         // A stop request (or staad stopping) dropped the goal: it will not be reached.
@@ -353,7 +360,8 @@ int waitFor(const std::string& socket_path, const WaitTarget& target, double tim
       }
       // Unreachable is final for this goal: waiting longer cannot bring the robot there.
       if (state == "unreachable" && current) {
-        std::cerr << "staactl: wait: the goal is unreachable (waiting for " << target.state << ")\n";
+        std::cerr << "staactl: wait: the goal is unreachable" << reasonOf(status) << " (waiting for " << target.state
+                  << ")\n";
         return kExitFailed;
       }
     }

@@ -410,6 +410,7 @@ void ControlTask::publishStatus(rt::Nanos now) {
   s.goal = goal_;
   s.goal_id = goal_id_;
   s.fault = fault_;
+  s.reason = state_ == DaemonState::kUnreachable ? toString(last_output_.path_status) : nullptr;
   s.base = base_.status;
   s.cycles = cycles_;
   // The thread's timing is read by the service thread from the activity (costly here).

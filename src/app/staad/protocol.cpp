@@ -403,6 +403,7 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
   j["goal_id"] = status.goal_id;
   j["queued_goal_id"] = status.queued_goal_id;
   j["fault"] = faultJson(status);
+  j["reason"] = status.reason != nullptr ? Json(status.reason) : Json(nullptr);
   // cycle (the contract's), and beyond it what an engineer looks at when the contract's
   // numbers look wrong: wake, the overruns by cause, realtime.
   addThreadJson(j, status.control_thread, status.cycles);

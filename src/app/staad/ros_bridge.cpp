@@ -30,8 +30,8 @@ std::string fixed(double value, int digits = 3) {
 std::string abortReason(const Status& s) {
   switch (s.state) {
     case DaemonState::kUnreachable:
-      return "unreachable: no path from (" + fixed(s.pose.x) + ", " + fixed(s.pose.y) + ") to the goal (" +
-             fixed(s.goal.x) + ", " + fixed(s.goal.y) + ") in the map, or the goal is inside an obstacle";
+      return "unreachable: " + std::string(s.reason != nullptr ? s.reason : "no path") + " from (" + fixed(s.pose.x) +
+             ", " + fixed(s.pose.y) + ") to the goal (" + fixed(s.goal.x) + ", " + fixed(s.goal.y) + ") in the map";
     case DaemonState::kFault: return "fault: " + statusJson(s, 0)["fault"].dump();
     case DaemonState::kStopped: return "stopped: a stop request (staactl stop) dropped the goal";
     default: return {};

@@ -64,6 +64,9 @@ struct Status {
   // given by the service thread as it queues goal requests: 1, 2, ... (never reused).
   std::uint64_t goal_id = 0;
   FaultKind fault = FaultKind::kNone;
+  // Why the goal is unreachable (state kUnreachable: the path's status, a static string such
+  // as "no passage wider than the footprint"); null in every other state.
+  const char* reason = nullptr;
   // The base driver's own view: its fault and code, enabled, what it refused on the bus.
   hal::BaseStatus base;
   // Control cycles run (the control task's own count, also when a test steps it).

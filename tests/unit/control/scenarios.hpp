@@ -102,4 +102,73 @@ inline Scenario closingGap() {
   return s;
 }
 
+// ---- Passages narrower than the circumscribed circle (issue 16) ----
+
+// A rectangular base, `length` x `width`, its origin at the centre (a typical AMR).
+inline RobotProfile rectangleRobot(double length, double width) {
+  RobotProfile r;
+  r.name = "rectangle";
+  const double x = 0.5 * length, y = 0.5 * width;
+  r.footprint = {{x, -y}, {x, y}, {-x, y}, {-x, -y}};  // counter-clockwise
+  r.limits = MotionLimits{1.0, -0.5, 2.0, 1.0, 3.0};
+  return r;
+}
+
+// A 0.2 m thick wall across a 12 x 8 m room with one slot of `width` (centred at y = 4); a
+// 0.5 x 0.8 m robot goes from one side to the other.
+inline Scenario slot(double width) {
+  Scenario s = baseScenario("slot", Box{{0, 0}, {12, 8}});
+  s.robot = rectangleRobot(0.8, 0.5);
+  s.map.obstacles = {box(5.9, 0, 6.1, 4.0 - 0.5 * width), box(5.9, 4.0 + 0.5 * width, 6.1, 8)};
+  s.start = {2.0, 4.0, 0.0};
+  s.goal = {10.0, 4.0, 0.0};
+  return s;
+}
+
+// The same slot in a wall at 45 degrees: the wall runs along x + y = 12 through (6, 6).
+inline Scenario slotAt45(double width) {
+  Scenario s = baseScenario("slot-45", Box{{0, 0}, {12, 12}});
+  s.robot = rectangleRobot(0.8, 0.5);
+  const Vec2 c{6.0, 6.0};
+  const Vec2 along = Vec2(-1.0, 1.0).normalized(), across = Vec2(1.0, 1.0).normalized();
+  auto piece = [&](double s0, double s1) {  // the wall from s0 to s1 along it, 0.2 m thick
+    return Polygon{c + s0 * along - 0.1 * across, c + s1 * along - 0.1 * across, c + s1 * along + 0.1 * across,
+                   c + s0 * along + 0.1 * across};
+  };
+  s.map.obstacles = {piece(0.5 * width, 9.0), piece(-9.0, -0.5 * width)};
+  s.start = {3.0, 3.0, 0.0};
+  s.goal = {9.0, 9.0, 0.7854};
+  return s;
+}
+
+// A 0.7 m door in the wall x = 6 opens into a 1.1 m corridor that runs north at once: the
+// robot passes the door and turns by 90 degrees behind it.
+inline Scenario doorThenTurn() {
+  Scenario s = baseScenario("door-turn", Box{{0, 0}, {10, 8}});
+  s.robot = rectangleRobot(0.8, 0.5);
+  s.map.obstacles = {box(5.9, 0, 6.1, 1.65), box(5.9, 2.35, 6.1, 8),  // the door: y in [1.65, 2.35]
+                     box(7.2, 0, 7.4, 8)};                             // the corridor: x in [6.1, 7.2]
+  s.start = {3.0, 2.0, 0.0};
+  s.goal = {6.65, 6.5, 1.5708};
+  return s;
+}
+
+// The issue's building: four 4 m rooms in a row, 1.2 m doors, furniture near each door that
+// leaves 0.75-0.8 m to pass, and a 0.5 m wide, 0.65 m long robot whose goal is three rooms away.
+inline Scenario buildingOfFourRooms() {
+  Scenario s = baseScenario("building", Box{{0, 0}, {16, 4}});
+  s.robot = rectangleRobot(0.65, 0.5);
+  for (double x : {4.0, 8.0, 12.0}) {  // walls with a door at y in [1.4, 2.6]
+    s.map.obstacles.push_back(box(x - 0.05, 0.0, x + 0.05, 1.4));
+    s.map.obstacles.push_back(box(x - 0.05, 2.6, x + 0.05, 4.0));
+  }
+  s.map.obstacles.push_back(box(3.45, 2.15, 3.95, 2.65));  // a cabinet beside the first door: 0.75 m left
+  s.map.obstacles.push_back(box(8.1, 0.9, 8.6, 1.4 + 0.45)); // a chair behind the second: 0.75 m
+  s.map.obstacles.push_back(box(11.4, 2.2, 11.9, 3.0));      // shelves in front of the third: 0.8 m
+  s.map.obstacles.push_back(box(0.5, 0.3, 1.5, 1.0));        // a table in the first room
+  s.start = {1.5, 2.0, 0.0};
+  s.goal = {14.5, 2.0, 0.0};
+  return s;
+}
+
 }  // namespace staa::test

@@ -80,5 +80,35 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
   }
 }
 
+// Issue 16: cycles whose route runs through passages only the passage map M'' opens (both
+// route searches, the band's cost, the local paths in M'', the exact static collision checks)
+// allocate nothing either: the 0.5 x 0.65 m robot through the building's three narrowed doors.
+TEST(ControlAllocations, PassageCyclesAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_control_alloc must link staa_rt_alloc_hook";
+  const Scenario s = test::buildingOfFourRooms();
+  World world(s);
+  ControlConfig config;
+  ControlCycle cycle(s.map, s.robot, config);
+  ASSERT_TRUE(cycle.pathPlanner().hasPassageMap());
+  cycle.setGoal(s.goal);
+  std::size_t allocations = 0;
+  int passage_cycles = 0, planned = 0;
+  for (int k = 0; k < 600; ++k) {
+    CycleInputs in;
+    const RobotState& r = world.robot();
+    in.robot = UnicycleState{r.pose.x, r.pose.y, r.pose.theta, r.v, r.w};
+    rt::AllocationScope scope;
+    const CycleOutput out = cycle.step(in, PlannerBudget::expansions(300));
+    allocations += scope.count();
+    passage_cycles += out.passage_mode;
+    planned += out.planned;
+    world.step(1.0 / 30.0, out.v_cmd, out.w_cmd);
+    if (out.state == CycleState::kReached) cycle.setGoal(cycle.goal()->x > 8.0 ? s.start : s.goal);
+  }
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(passage_cycles, 30);
+  EXPECT_GT(planned, 500);
+}
+
 }  // namespace
 }  // namespace staa

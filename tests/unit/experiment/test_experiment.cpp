@@ -130,6 +130,11 @@ TEST(Experiment, TinyExperimentWritesEveryRunWithTheRequiredKeysAndAFigure) {
   turning.control.staa.predict_turning = !spec.control.staa.predict_turning;
   const Json doc_turning = Json::parse(readFile(writeExperimentResults(dir / "turning", turning, runs)));
   EXPECT_EQ(doc_turning["spec"]["predict_turning"], turning.control.staa.predict_turning);
+  ExperimentSpec lazy = spec;
+  lazy.control.staa.lazy_heuristic = !spec.control.staa.lazy_heuristic;
+  const Json doc_lazy = Json::parse(readFile(writeExperimentResults(dir / "lazy", lazy, runs)));
+  EXPECT_EQ(doc_lazy["spec"]["lazy_heuristic"], lazy.control.staa.lazy_heuristic);
+  EXPECT_EQ(doc["spec"]["lazy_heuristic"], spec.control.staa.lazy_heuristic);
 
   const ExperimentPlots plots = writeExperimentPlots(dir, spec, runs);
   const std::string svg = readFile(dir / "scores.svg");

@@ -58,5 +58,30 @@ TEST(LocalAllocations, ThousandUpdatesAndPredictionsAllocateNothing) {
   EXPECT_GE(occupied, 0);
 }
 
+// G~'s reach test (issue 16) runs when the path leaves the box and comes back: a loop behind
+// the robot and ahead again, 1,000 updates among the office's walls, allocating nothing.
+TEST(LocalAllocations, LoopingPathsReachTestAllocatesNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_local_alloc must link staa_rt_alloc_hook";
+  const PolygonMap office = generateOfficeMap();
+  PolygonSet walls;
+  walls.assign(std::span<const Polygon>(office.obstacles), PolygonSet::Options{});
+  LocalMap map;
+  std::vector<Vec2> path(5);
+  int later_piece = 0;
+  rt::AllocationScope scope;
+  for (int k = 0; k < 1000; ++k) {
+    const Pose2 robot{4.5 + 0.018 * k, 4.5 + 0.2 * std::sin(0.1 * k), 0.4 * std::sin(0.02 * k)};
+    path[0] = robot.position();
+    path[1] = robot.transform({-3.0, 0.0});
+    path[2] = robot.transform({-3.0, 1.0});
+    path[3] = robot.transform({3.0, 1.0});
+    path[4] = robot.transform({12.0, 1.0});
+    map.update(robot, walls, path, 0.0, 0.3);
+    later_piece += map.intermediateGoal().segment == 3;
+  }
+  EXPECT_EQ(scope.count(), 0u);
+  EXPECT_GT(later_piece, 0);  // the flood ran and found the later piece
+}
+
 }  // namespace
 }  // namespace staa

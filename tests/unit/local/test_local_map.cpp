@@ -404,9 +404,30 @@ TEST_F(IntermediateGoalTest, PathInsideIsTheFinalGoal) {
   EXPECT_EQ(g.segment, 1u);
 }
 
-TEST_F(IntermediateGoalTest, FirstExitCountsEvenIfThePathComesBack) {
-  const auto g = goalFor({{0, 0}, {7, 0}, {3, 0}});
-  expectAt(g, 6.0, 0.0, 0.0);
+// Issue 16: the farthest point along the path that lies in the box and is reached within it.
+TEST_F(IntermediateGoalTest, ThePathsLastPieceInTheBoxCountsNotItsFirstExit) {
+  // Out at the front and back in: the goal inside the box is G~.
+  auto g = goalFor({{0, 0}, {7, 0}, {3, 0}}, 0.7);
+  EXPECT_TRUE(g.is_final);
+  EXPECT_EQ(g.segment, 1u);
+  EXPECT_NEAR((robot.inverseTransform(g.pose.position()) - Vec2(3.0, 0.0)).norm(), 0.0, 1e-9);
+  // Out behind, round and back in, out ahead: G~ where it leaves ahead, heading along it.
+  g = goalFor({{0, 0}, {-3, 0}, {-3, 2}, {3, 2}, {9, 2}});
+  expectAt(g, 6.0, 2.0, 0.0);
+  EXPECT_FALSE(g.is_final);
+  EXPECT_EQ(g.segment, 3u);
+  // The first exit is the same function with no later piece counted.
+  std::vector<Vec2> path;
+  for (const Vec2& p : {Vec2(0, 0), Vec2(-3, 0), Vec2(-3, 2), Vec2(3, 2), Vec2(9, 2)}) path.push_back(robot.transform(p));
+  std::array<PathPiece, 8> pieces{};
+  const std::size_t n = pathPiecesInBox(map.boxCorners(), path, pieces);
+  ASSERT_EQ(n, 2u);
+  EXPECT_EQ(pieces[0].last, 0u);
+  EXPECT_EQ(pieces[1].first, 2u);  // (-3, 0) to (-3, 2) runs outside the box
+  EXPECT_EQ(pieces[1].last, 3u);
+  const std::array<bool, 2> first_only{true, false};
+  g = intermediateGoalOf(std::span<const PathPiece>(pieces.data(), n), first_only, path, 0.0);
+  expectAt(g, -2.0, 0.0, kPi);
   EXPECT_EQ(g.segment, 0u);
 }
 
@@ -427,6 +448,127 @@ TEST_F(IntermediateGoalTest, UpdateComputesGoalFromThePath) {
   map.update(robot, PolygonSet{}, {}, 0.5);  // no path: stay where the robot is
   EXPECT_TRUE(map.intermediateGoal().is_final);
   EXPECT_NEAR((map.intermediateGoal().pose.position() - robot.position()).norm(), 0.0, 1e-12);
+}
+
+// ---- G~ does not jump with the heading (issue 16) ----
+
+// A looping path, like the depot junction's: from the robot it runs 3 m back (south), 3 m
+// east, and north past the robot 3 m to its side, on for 15 m. At fixed positions along it the
+// robot turns through every heading in 0.5-degree steps.
+struct Sweep {
+  int jumps = 0;          // steps in which G~ moved more than 0.5 m
+  int unexplained = 0;    // ... while the path between the two G~ stayed partly in the box
+};
+
+double arcLengthOf(std::span<const Vec2> path, const IntermediateGoal& g) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < g.segment && i + 1 < path.size(); ++i) s += (path[i + 1] - path[i]).norm();
+  return s + (g.pose.position() - path[std::min(g.segment, path.size() - 1)]).norm();
+}
+
+Vec2 pointAt(std::span<const Vec2> path, double s) {
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const double len = (path[i + 1] - path[i]).norm();
+    if (s <= len) return path[i] + (s / len) * (path[i + 1] - path[i]);
+    s -= len;
+  }
+  return path.back();
+}
+
+bool inBoxOf(const Pose2& robot, const Vec2& w) {
+  const Vec2 l = robot.inverseTransform(w);
+  return l.x() >= -2.0 - 1e-9 && l.x() <= 6.0 + 1e-9 && std::abs(l.y()) <= 4.0 + 1e-9;
+}
+
+template <typename GoalFn>
+Sweep sweepHeadings(GoalFn&& goalFor) {
+  const std::vector<Vec2> loop{{0, 0}, {0, -3}, {3, -3}, {3, 15}};
+  Sweep out;
+  // Positions along the loop, each with the rest of the path ahead of it.
+  for (double start : {0.0, 1.0, 2.0, 2.5, 3.5, 4.5, 6.5, 8.0}) {
+    std::vector<Vec2> path{pointAt(loop, start)};
+    double s = 0.0;
+    for (std::size_t i = 0; i + 1 < loop.size(); ++i) {
+      s += (loop[i + 1] - loop[i]).norm();
+      if (s > start + 1e-9) path.push_back(loop[i + 1]);
+    }
+    Pose2 prev_robot;
+    IntermediateGoal prev;
+    for (int k = 0; k <= 720; ++k) {
+      const Pose2 robot{path[0].x(), path[0].y(), -kPi + k * kPi / 360.0};
+      const IntermediateGoal g = goalFor(robot, path);
+      if (k > 0 && (g.pose.position() - prev.pose.position()).norm() > 0.5) {
+        ++out.jumps;
+        // Explained when, at the heading whose G~ lies nearer along the path, the path from
+        // there to the other G~ lies wholly outside that heading's box: the path itself left it.
+        const double a = arcLengthOf(path, prev), b = arcLengthOf(path, g);
+        const Pose2& near_robot = a < b ? prev_robot : robot;
+        bool outside = true;
+        for (double t = std::min(a, b) + 0.02; t < std::max(a, b) - 0.02 && outside; t += 0.01) {
+          outside = !inBoxOf(near_robot, pointAt(path, t));
+        }
+        out.unexplained += outside ? 0 : 1;
+      }
+      prev = g;
+      prev_robot = robot;
+    }
+  }
+  return out;
+}
+
+TEST(IntermediateGoalSweep, MovesContinuouslyWithTheHeadingExceptWhereThePathLeavesTheBox) {
+  LocalMap map;
+  const Sweep steady = sweepHeadings([&](const Pose2& robot, std::span<const Vec2> path) {
+    map.update(robot, PolygonSet{}, path, 0.0);
+    return map.intermediateGoal();
+  });
+  EXPECT_EQ(steady.unexplained, 0);
+  // The paper's first exit on the same sweep: it jumps by metres along the path while the
+  // path's later part stays in the box (the depot junction's rocking), so the check can fail.
+  const Sweep first_exit = sweepHeadings([&](const Pose2& robot, std::span<const Vec2> path) {
+    map.update(robot, PolygonSet{}, {}, 0.0);
+    std::array<PathPiece, 16> pieces{};
+    const std::size_t n = pathPiecesInBox(map.boxCorners(), path, pieces);
+    const std::array<bool, 1> first_only{true};
+    return intermediateGoalOf(std::span<const PathPiece>(pieces.data(), n), first_only, path, 0.0);
+  });
+  EXPECT_GT(first_exit.unexplained, 0);
+  EXPECT_LT(steady.jumps, first_exit.jumps);
+  RecordProperty("steady_jumps", steady.jumps);
+  RecordProperty("first_exit_jumps", first_exit.jumps);
+  RecordProperty("first_exit_unexplained", first_exit.unexplained);
+}
+
+// Reached without leaving the box: a wall between the robot and the path's later piece (the
+// path goes round it outside the box) keeps G~ on the first piece; a door in that wall wide
+// enough for the clearance opens the later piece.
+TEST(IntermediateGoalReach, ALaterPieceCountsOnlyWhereTheRobotReachesItWithinTheBox) {
+  const Pose2 robot{0.0, 0.0, 0.0};
+  // Back 3 m (out of the box behind), 2.5 m left, and forward along y = 2.5, out ahead.
+  const std::vector<Vec2> path{{0, 0}, {-3, 0}, {-3, 2.5}, {9, 2.5}};
+  auto wallWithDoor = [](double door) {
+    std::vector<Polygon> w;
+    const double lo = 2.0 - 0.5 * door, hi = 2.0 + 0.5 * door;  // the door along x, centred at x = 2
+    w.push_back({{-3.0, 1.2}, {door > 0.0 ? lo : 7.0, 1.2}, {door > 0.0 ? lo : 7.0, 1.4}, {-3.0, 1.4}});
+    if (door > 0.0) w.push_back({{hi, 1.2}, {7.0, 1.2}, {7.0, 1.4}, {hi, 1.4}});
+    return w;
+  };
+  LocalMap map;
+  for (double door : {0.0, 0.4, 1.2}) {
+    const std::vector<Polygon> walls = wallWithDoor(door);
+    PolygonSet set;
+    set.assign(std::span<const Polygon>(walls), PolygonSet::Options{});
+    map.update(robot, set, path, 0.0, 0.3);
+    const Vec2 g = map.intermediateGoal().pose.position();
+    if (door < 0.6 + 2 * 0.05) {
+      EXPECT_NEAR((g - Vec2(-2.0, 0.0)).norm(), 0.0, 1e-9) << "door " << door;  // the first exit, behind
+    } else {
+      EXPECT_NEAR((g - Vec2(6.0, 2.5)).norm(), 0.0, 1e-9) << "door " << door;   // the later piece's exit ahead
+    }
+  }
+  // Without obstacles every piece is reached.
+  map.update(robot, PolygonSet{}, path, 0.0, 0.3);
+  EXPECT_NEAR((map.intermediateGoal().pose.position() - Vec2(6.0, 2.5)).norm(), 0.0, 1e-9);
 }
 
 // update()'s time is measured by tests/bench/bench_local, not here: unit tests are not timed.

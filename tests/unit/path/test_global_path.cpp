@@ -4,6 +4,7 @@
 #include "map/ros_import.hpp"
 #include "shared_dir.hpp"
 
+#include <cmath>
 #include <random>
 
 #include "posts_scene.hpp"
@@ -48,6 +49,117 @@ TEST(GlobalPath, DoorNarrowerThanTheRobotIsNoPath) {
   opt.inflation_radius_m = 0.65;  // 1.2 m door < 2 * 0.65
   GlobalPathPlanner planner(twoRooms(), opt);
   EXPECT_EQ(planner.plan({1, 2}, {7, 2}).status, PathStatus::kNoPath);
+}
+
+// ---- The passage map M'' (issue 16) ----
+
+// A wall across a 12 x 12 m room (x = 6, 0.2 m thick) with a slot of `slot` at y = 6 and,
+// when `door_y` > 0, a 1.5 m door centred at door_y.
+PolygonMap wallWithSlot(double slot, double door_y = 0.0) {
+  PolygonMap m;
+  m.name = "slot";
+  m.bounds = Box{{0, 0}, {12, 12}};
+  auto wall = [](double y0, double y1) { return Polygon{{5.9, y0}, {6.1, y0}, {6.1, y1}, {5.9, y1}}; };
+  const double lo = 6.0 - 0.5 * slot, hi = 6.0 + 0.5 * slot;
+  if (door_y <= 0.0) {
+    m.obstacles = {wall(0.0, lo), wall(hi, 12.0)};
+  } else {
+    m.obstacles = {wall(0.0, lo), wall(hi, door_y - 0.75), wall(door_y + 0.75, 12.0)};
+  }
+  return m;
+}
+
+// The 0.5 x 0.8 m rectangle: circumradius 0.472 m, passage map grown by 0.25 + 0.01 m.
+GlobalPathOptions rectangleOptions() {
+  GlobalPathOptions opt;
+  opt.inflation_radius_m = std::hypot(0.4, 0.25);
+  opt.passage_inflation_m = 0.26;
+  return opt;
+}
+
+TEST(GlobalPath, ThePassageMapOpensASlotMPrimeClosesAndNamesWhyNothingFits) {
+  for (double slot : {0.55, 0.65, 0.8}) {
+    GlobalPathOptions wide_only = rectangleOptions();
+    wide_only.passage_inflation_m = 0.0;
+    GlobalPathPlanner before(wallWithSlot(slot), wide_only);
+    EXPECT_EQ(before.plan({3, 6}, {9, 6}).status, PathStatus::kNoPath) << slot;
+    GlobalPathPlanner planner(wallWithSlot(slot), rectangleOptions());
+    ASSERT_TRUE(planner.hasPassageMap());
+    const GlobalPath p = planner.plan({3, 6}, {9, 6});
+    ASSERT_EQ(p.status, PathStatus::kFound) << slot;
+    EXPECT_TRUE(p.passage);
+    // Straight through the slot: 6 m, all of the wall's 0.2 m and the approach inside M'.
+    EXPECT_NEAR(p.length, 6.0, 1e-9) << slot;
+    const double band = planner.bandLength(p.path);
+    EXPECT_GT(band, 0.2) << slot;
+    EXPECT_LT(band, 2.0 * 0.5 + 0.2) << slot;
+  }
+  GlobalPathPlanner planner(wallWithSlot(0.45), rectangleOptions());
+  const GlobalPath p = planner.plan({3, 6}, {9, 6});
+  EXPECT_EQ(p.status, PathStatus::kNoPassage);
+  EXPECT_STREQ(toString(p.status), "no passage wider than the footprint");
+}
+
+TEST(GlobalPath, TheBandsCostPrefersAWideDoorUnlessTheDetourCostsMore) {
+  // The door 1.5 m above the slot: the detour (about 0.8 m) costs less than the slot's band.
+  {
+    GlobalPathPlanner planner(wallWithSlot(0.7, 7.5), rectangleOptions());
+    const GlobalPath p = planner.plan({3, 6}, {9, 6});
+    ASSERT_EQ(p.status, PathStatus::kFound);
+    EXPECT_FALSE(p.passage);
+    EXPECT_GT(p.length, 6.5);
+    EXPECT_EQ(p.band_m, 0.0);
+  }
+  // The door 5 m above: a 6 m detour. The slot's route is taken, its band weighed.
+  {
+    GlobalPathPlanner planner(wallWithSlot(0.7, 11.0), rectangleOptions());
+    const GlobalPath p = planner.plan({3, 6}, {9, 6});
+    ASSERT_EQ(p.status, PathStatus::kFound);
+    EXPECT_TRUE(p.passage);
+    EXPECT_NEAR(p.length, 6.0, 1e-9);
+    EXPECT_GT(p.band_m, 0.2);
+    EXPECT_NEAR(p.band_m, planner.bandLength(p.path), 1e-12);
+  }
+  // Without the band's cost the shorter route always wins.
+  {
+    GlobalPathOptions opt = rectangleOptions();
+    opt.band_cost = 0.0;
+    GlobalPathPlanner planner(wallWithSlot(0.7, 7.5), opt);
+    EXPECT_TRUE(planner.plan({3, 6}, {9, 6}).passage);
+  }
+}
+
+TEST(GlobalPath, TheRouteKeepsItsMapForAGoalUntilTheOtherIsCheaperByTheHysteresis) {
+  // From (3, 6) the slot wins; from (5, 10.5), beside the door 5 m up, the door wins by far.
+  const PolygonMap m = wallWithSlot(0.7, 11.0);
+  GlobalPathOptions sticky = rectangleOptions();
+  sticky.route_hysteresis_m = 100.0;
+  GlobalPathPlanner planner(m, sticky);
+  EXPECT_TRUE(planner.plan({3, 6}, {9, 6}).passage);
+  EXPECT_TRUE(planner.plan({5, 10.5}, {9, 6}).passage);  // held
+  EXPECT_FALSE(planner.plan({5, 10.5}, {9, 6.5}).passage);  // a new goal chooses afresh
+  GlobalPathPlanner loose(m, rectangleOptions());
+  EXPECT_TRUE(loose.plan({3, 6}, {9, 6}).passage);
+  EXPECT_FALSE(loose.plan({5, 10.5}, {9, 6}).passage);
+}
+
+TEST(GlobalPath, ARoundRobotsPassageMapIsItsMPrime) {
+  GlobalPathOptions opt;
+  opt.inflation_radius_m = 0.3;
+  opt.passage_inflation_m = 0.3;  // inscribed radius + margin reaches the circumradius
+  GlobalPathPlanner planner(twoRooms(), opt);
+  EXPECT_FALSE(planner.hasPassageMap());
+  GlobalPathOptions plain = opt;
+  plain.passage_inflation_m = 0.0;
+  GlobalPathPlanner before(twoRooms(), plain);
+  const GlobalPath a = planner.plan({1, 0.5}, {7, 0.5});
+  const GlobalPath b = before.plan({1, 0.5}, {7, 0.5});
+  ASSERT_EQ(a.path.size(), b.path.size());
+  for (std::size_t i = 0; i < a.path.size(); ++i) EXPECT_EQ(a.path[i], b.path[i]);
+  // Its failure is the footprint's.
+  opt.inflation_radius_m = opt.passage_inflation_m = 0.65;
+  GlobalPathPlanner closed(twoRooms(), opt);
+  EXPECT_EQ(closed.plan({1, 2}, {7, 2}).status, PathStatus::kNoPassage);
 }
 
 TEST(GlobalPath, GoalInsideARealObstacleIsAnErrorGoalNearAWallIsMoved) {

@@ -31,8 +31,8 @@ constexpr double kHalf = 0.2;  // the person: a 0.4 m square
 PolygonView view(const hal::ObstacleFrame::Obstacle& o) { return {o.vertices.data(), o.n}; }
 
 struct ViewRun {
-  ViewRun(std::vector<Mover> movers, const DepthObstaclesConfig& config)
-      : world(test::officeMap(), test::hsrProfile(), test::kCorridorStart, std::move(movers)),
+  ViewRun(std::vector<Mover> movers, const DepthObstaclesConfig& config, const RobotProfile& robot = test::hsrProfile())
+      : world(test::officeMap(), robot, test::kCorridorStart, std::move(movers)),
         camera(world, cameraConfig()),
         detector(test::officeMap(), camera.intrinsics(), camera.mount(), config),
         frame(test::newFrame()) {}
@@ -177,8 +177,13 @@ TEST(TrackKeeping, WithoutKeepingTheTrackIsForgottenAndStartsAgainAtRest) {
 TEST(TrackKeeping, APersonTheRobotTurnsAwayFromIsKeptWhereItWalks) {
   // A person 2 m ahead walks across the corridor at 0.5 m/s; the robot turns 1.2 rad to the
   // left and back at 1 rad/s: the person is out of the view for about a second, walking
-  // straight, so the kept track is where it is, and seen again its track goes on.
-  ViewRun run({test::boxMover({6.5, 3.6}, {6.5, 5.4}, 0.5)}, DepthObstaclesConfig{});
+  // straight, so the kept track is where it is, and seen again its track goes on. The HSR's
+  // profile turns at most 0.5 rad/s (0.5 rad/s^2): too slow to look away and back while the
+  // person is still crossing, so this robot has its footprint and camera but turns faster.
+  RobotProfile quick = test::hsrProfile();
+  quick.limits.w_max = 1.0;
+  quick.limits.b_max = 1.5;
+  ViewRun run({test::boxMover({6.5, 3.6}, {6.5, 5.4}, 0.5)}, DepthObstaclesConfig{}, quick);
   int kept = 0;
   double worst = 0.0, worst_v_back = 0.0;
   bool was_out = false;

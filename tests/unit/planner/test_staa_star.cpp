@@ -7,6 +7,8 @@
 #include "path/global_path.hpp"
 #include "path/polygon_set.hpp"
 
+#include <bit>
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -310,6 +312,254 @@ TEST(StaaStar, LazyHeuristicQueriesFarLessAndStillFinishes) {
   lazy.forEachEdge([&](const UnicycleState&, const UnicycleState& s) {
     EXPECT_LE(lazy.heuristic().lowerBound(s), lazy.heuristic().evaluate(s, 4) + 1e-12);
   });
+}
+
+}  // namespace
+}  // namespace staa
+
+namespace staa {
+namespace {
+
+// Two rooms' walls and a pillar, and the local box over them at a pose near the pillar.
+struct Walls {
+  std::vector<Polygon> real{box(3, 3, 9, 3.12), box(3, 3, 3.12, 9), box(8.88, 3, 9, 5), box(8.88, 6.5, 9, 9),
+                            box(5, 5.5, 5.4, 5.9)};
+  PolygonSet set;
+  LocalMap local;
+  Walls() { set.assign(std::span<const Polygon>(real), PolygonSet::Options{0.5}); }
+  void at(const Pose2& robot) {
+    const Vec2 path[] = {robot.position(), robot.position() + Vec2(5, 0)};
+    local.update(robot, set, path, 0.0);
+  }
+};
+
+// The swept static check looks up every sample of the motion (no point moves more than a
+// sample step between two of them) unless a looked-up pose's clearance already covers it.
+// The reference here looks up every sample and the end pose, without shortcuts.
+bool everySampleFree(const CollisionChecker& checker, const ArcMotion& m) {
+  if (!checker.fastPoseFreeStatic({m.x1, m.y1, m.c1, m.s1})) return false;
+  const int n = std::max(1, static_cast<int>(std::ceil(checker.travelBound(m) / (0.9 * LocalMapConfig{}.cell_m))));
+  const double step = m.w_mid * m.dt / n;
+  double cs, ss;
+  sinCos(step, cs, ss);
+  const bool straight = std::abs(m.w_mid * m.dt) < 1e-6;
+  const double r = straight ? 0.0 : m.v_mid / m.w_mid;
+  double c = m.c0, sn = m.s0;
+  for (int k = 1; k < n; ++k) {
+    const double nc = c * cs - sn * ss;
+    sn = sn * cs + c * ss;
+    c = nc;
+    CollisionChecker::FastPose p{0.0, 0.0, c, sn};
+    if (straight) {
+      const double d = m.v_mid * m.dt * k / n;
+      p.x = m.x0 + d * m.c0;
+      p.y = m.y0 + d * m.s0;
+    } else {
+      p.x = m.x0 + r * (sn - m.s0);
+      p.y = m.y0 - r * (c - m.c0);
+    }
+    if (!checker.fastPoseFreeStatic(p)) return false;
+  }
+  return true;
+}
+
+// The clearances of a motion's start (of its footprint, and of a disc of the circumradius about
+// its origin) let whole motions, and samples near either end, go without lookups: the answers
+// must be those of looking up every sample, on real walls, for the paper's agent's 49 motions
+// from many states (near walls and in the open).
+TEST(CollisionChecker, SweptStaticCheckWithEndClearancesAnswersAsEverySampleLookedUp) {
+  Walls walls;
+  const RobotProfile robot = paperAgentProfile();
+  CollisionChecker checker(robot, walls.local.config());
+  const ActionSet actions(robot.limits, 7);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int shortcut = 0, blocked = 0, motions = 0, turns_in_walls = 0;
+  for (int pose = 0; pose < 12; ++pose) {
+    const Pose2 centre{6.0 + 2.0 * u(rng), 6.0 + 2.0 * u(rng), 3.0 * u(rng)};
+    walls.at(centre);
+    checker.prepare(walls.local);
+    for (int k = 0; k < 40; ++k) {
+      // Every other state stands, so that some motions turn on the spot (the origin does not
+      // move: the disc clearance clears them only when there is one).
+      const double v = k % 2 == 0 ? 0.0 : 1.5 + 0.5 * u(rng);
+      const UnicycleState s{centre.x + 2.0 * u(rng), centre.y + 2.0 * u(rng), 3.0 * u(rng), v, 3.0 * u(rng)};
+      double slack = 0.0;
+      if (!checker.fastPoseFreeStatic({s.x, s.y, std::cos(s.theta), std::sin(s.theta)}, &slack)) continue;
+      for (std::size_t a = 0; a < actions.size(); ++a) {
+        const ArcVelocities vel = arcVelocities(s, actions[a], 0.3, robot.limits);
+        const double dth = vel.w_mid * 0.3;
+        const ArcMotion m = makeArcMotion(s, std::cos(s.theta), std::sin(s.theta), vel.v_mid, vel.w_mid, 0.3,
+                                          std::cos(dth), std::sin(dth));
+        double end_slack = -2.0;
+        const bool fast = checker.motionFreeStatic(m, slack, &end_slack, checker.discSlack(s.x, s.y));
+        const bool reference = everySampleFree(checker, m);
+        ASSERT_EQ(fast, reference) << "state " << s.x << ", " << s.y << ", action " << a;
+        EXPECT_EQ(checker.motionFreeStatic(m), reference);
+        ++motions;
+        blocked += reference ? 0 : 1;
+        turns_in_walls += m.v_mid == 0.0 && m.w_mid != 0.0 && checker.discSlack(s.x, s.y) == 0.0 ? 1 : 0;
+        if (end_slack == -1.0) {
+          ++shortcut;
+        } else {
+          double looked_up = 0.0;
+          checker.fastPoseFreeStatic({m.x1, m.y1, m.c1, m.s1}, &looked_up);
+          EXPECT_EQ(end_slack, looked_up);
+        }
+      }
+    }
+  }
+  // Both kinds occur: motions cleared without a lookup, and motions into the walls; and turns
+  // on the spot where the disc clearance is 0.
+  EXPECT_GT(shortcut, motions / 20);
+  EXPECT_GT(blocked, motions / 20);
+  EXPECT_GT(turns_in_walls, 20);
+}
+
+// A turn on the spot beside a post's corner: the start (heading 0) and the end (heading
+// 0.78) are clear of the post, the headings in between sweep the agent's front corner through
+// it. The origin does not move and its disc clearance is 0 (the post is nearer than the
+// circumradius), so only the looked-up samples can find it.
+TEST(CollisionChecker, TurnOnTheSpotIntoAPostCornerIsBlockedWithoutDiscClearance) {
+  Walls walls;
+  const RobotProfile robot = paperAgentProfile();
+  CollisionChecker checker(robot, walls.local.config());
+  const UnicycleState s{4.69, 5.19, 0.0, 0.0, 0.0};
+  walls.at(Pose2{s.x, s.y, s.theta});
+  checker.prepare(walls.local);
+  const double w = 2.6, dt = 0.3;
+  const ArcMotion m = makeArcMotion(s, 1.0, 0.0, 0.0, w, dt, std::cos(w * dt), std::sin(w * dt));
+  double slack = -1.0;
+  ASSERT_TRUE(checker.fastPoseFreeStatic({s.x, s.y, 1.0, 0.0}, &slack));
+  ASSERT_TRUE(checker.fastPoseFreeStatic({m.x1, m.y1, m.c1, m.s1}));
+  ASSERT_EQ(checker.discSlack(s.x, s.y), 0.0);
+  ASSERT_LT(slack, checker.travelBound(m));
+  EXPECT_FALSE(everySampleFree(checker, m));
+  double end_slack = -2.0;
+  EXPECT_FALSE(checker.motionFreeStatic(m, slack, &end_slack, checker.discSlack(s.x, s.y)));
+  EXPECT_FALSE(checker.motionFreeStatic(m));
+}
+
+// A pose is free of the grid when none of the footprint's outline points (no two more than a
+// sample step apart) and its centroid lies in an occupied cell; the covering circles and the
+// distance field only save lookups. Poses of the paper's agent all over two rooms' walls,
+// against every outline point and the centroid looked up.
+TEST(CollisionChecker, PoseCheckAnswersAsEveryOutlinePointLookedUp) {
+  Walls walls;
+  const RobotProfile robot = paperAgentProfile();
+  CollisionChecker checker(robot, walls.local.config());
+  const Polygon& fp = checker.footprint();
+  double area = 0.0;
+  Vec2 centroid(0.0, 0.0);
+  for (std::size_t i = 0; i < fp.size(); ++i) {
+    const double cr = cross(fp[i], fp[(i + 1) % fp.size()]);
+    area += cr;
+    centroid += (fp[i] + fp[(i + 1) % fp.size()]) * cr;
+  }
+  centroid /= 3.0 * area;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int blocked = 0, poses = 0;
+  for (int box_pose = 0; box_pose < 10; ++box_pose) {
+    const Pose2 centre{6.0 + 2.0 * u(rng), 6.0 + 2.0 * u(rng), 3.0 * u(rng)};
+    walls.at(centre);
+    checker.prepare(walls.local);
+    for (int k = 0; k < 400; ++k) {
+      // Well inside the box (2 m behind its origin, 6 m ahead, 4 m to each side): every circle's
+      // centre is inside the grid.
+      const Vec2 at = centre.transform({1.75 + 2.75 * u(rng), 3.0 * u(rng)});
+      const Pose2 p{at.x(), at.y(), 3.0 * u(rng)};
+      auto occupied = [&](const Vec2& q) {
+        int i = 0, j = 0;
+        if (!walls.local.cellOf(p.transform(q), i, j)) return false;
+        return walls.local.grid()[static_cast<std::size_t>(j * walls.local.width() + i)] != 0;
+      };
+      bool reference = !occupied(centroid);
+      for (const Vec2& q : checker.outline()) reference = reference && !occupied(q);
+      ASSERT_EQ(checker.poseFreeStatic(p), reference) << "pose " << p.x << ", " << p.y << ", " << p.theta;
+      ++poses;
+      blocked += reference ? 0 : 1;
+    }
+  }
+  EXPECT_GT(blocked, poses / 20);
+  EXPECT_LT(blocked, poses / 2);
+}
+
+// Sorting out the moving obstacles that cannot come near a motion leaves the answer of the
+// swept dynamic check as it was with all of them checked at every sample: people walking
+// and turning around a robot among them, with and without heading spread and the turning
+// prediction; and far ones are sorted out.
+TEST(CollisionChecker, NearObstaclesLeaveOutOnlyObstaclesNoSampleCanTouch) {
+  const RobotProfile robot = paperAgentProfile();
+  const CollisionChecker checker(robot, LocalMapConfig{}, 0.02);
+  const ActionSet actions(robot.limits, 7);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int left_out = 0, pairs = 0, hits = 0, motions = 0;
+  for (int scene = 0; scene < 30; ++scene) {
+    std::vector<Polygon> people;
+    std::vector<Vec2> velocities;
+    std::vector<double> turns;
+    for (int i = 0; i < 8; ++i) {
+      const Vec2 c(4.0 * u(rng), 4.0 * u(rng));
+      people.push_back(box(c.x() - 0.25, c.y() - 0.25, c.x() + 0.25, c.y() + 0.25));
+      velocities.emplace_back(1.5 * u(rng), 1.5 * u(rng));
+      turns.push_back(i % 2 == 0 ? 0.0 : 1.5 * u(rng));
+    }
+    std::vector<PolygonView> views(people.begin(), people.end());
+    DynamicObstacleSet movers(8);
+    movers.set(views, velocities, turns);
+    const UnicycleState s{0.5 * u(rng), 0.5 * u(rng), 3.0 * u(rng), 1.5 + 0.5 * u(rng), 2.0 * u(rng)};
+    const double t0 = 0.3 * static_cast<double>(scene % 3);
+    for (const double spread : {0.0, 0.2}) {
+      for (const bool turning : {false, true}) {
+        for (std::size_t a = 0; a < actions.size(); a += 3) {
+          const ArcVelocities vel = arcVelocities(s, actions[a], 0.3, robot.limits);
+          const CollisionChecker::NearObstacles near =
+              checker.nearObstacles(s.position(), std::abs(vel.v_mid) * 0.3, movers, t0, 0.3, spread, turning);
+          const CollisionChecker::NearObstacles all{~std::uint64_t{0} >> (64 - movers.size()), near.fastest};
+          const bool sorted = checker.motionFreeDynamic(s, vel, 0.3, movers, t0, spread, turning);
+          const bool every = checker.motionFreeDynamic(s, vel, 0.3, movers, t0, all, spread, turning);
+          ASSERT_EQ(sorted, every) << "scene " << scene << ", action " << a;
+          ++motions;
+          hits += every ? 0 : 1;
+          left_out += static_cast<int>(movers.size()) - std::popcount(near.mask);
+          pairs += static_cast<int>(movers.size());
+        }
+      }
+    }
+  }
+  EXPECT_GT(hits, motions / 20);      // the scenes are crowded enough to hit someone
+  EXPECT_GT(left_out, pairs / 4);     // and most people are left out of most checks
+  // One person 6 m away, standing: never near a 0.3 s motion; one 1 m away: near.
+  const Polygon far_person = box(5.75, -0.25, 6.25, 0.25), close_person = box(0.75, -0.25, 1.25, 0.25);
+  const PolygonView two[] = {PolygonView{far_person.data(), far_person.size()}, PolygonView{close_person.data(), close_person.size()}};
+  const Vec2 still[] = {Vec2(0.0, 0.0), Vec2(0.0, 0.0)};
+  DynamicObstacleSet pair(2);
+  pair.set(two, still);
+  EXPECT_EQ(checker.nearObstacles(Vec2(0.0, 0.0), 0.6, pair, 0.0, 0.3).mask, 0b10u);
+}
+
+// The closed table is cleared between plans: planning the same input twice, and on a fresh
+// planner, gives the same search.
+TEST(StaaStar, PlanningTheSameInputAgainGivesTheSameSearch) {
+  Bench bench(paperAgentProfile(), {box(3.0, -0.5, 3.5, 0.5)}, 0.5);
+  const UnicycleState start{0.0, 0.0, 0.0, 1.0, 0.0};
+  bench.update(start, Vec2(5.5, 0.0));
+  StaaStar planner = bench.planner();
+  const PlanResult first = planner.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(300));
+  const PlanResult second = planner.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(300));
+  StaaStar fresh = bench.planner();
+  const PlanResult third = fresh.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(300));
+  for (const PlanResult* r : {&second, &third}) {
+    EXPECT_EQ(r->stats.pops, first.stats.pops);
+    EXPECT_EQ(r->stats.expansions, first.stats.expansions);
+    EXPECT_EQ(r->stats.successors, first.stats.successors);
+    EXPECT_EQ(r->best_h, first.best_h);
+    EXPECT_EQ(r->first_action.a, first.first_action.a);
+    EXPECT_EQ(r->first_action.b, first.first_action.b);
+  }
+  EXPECT_GT(first.stats.expansions, 100u);
 }
 
 }  // namespace

@@ -265,13 +265,60 @@ TEST(RecordConfigKeys, ReadBackBitForBitAndSetOneByNameWithErrorsNamingKeyAndVal
 
 // A field added to the configuration structs needs its key (config_keys.cpp): these sizes
 // change with it. Update them once its key is in visitControlConfig.
+// Issue 16: the global path's choice between M' and M'' (its hysteresis) is carried from
+// cycle to cycle, so it is memory: recorded, decoded and restored, and forgotten by a new goal.
+TEST(CycleRecord, TheRouteChoiceBetweenMPrimeAndThePassageMapIsMemory) {
+  // A 0.5 x 0.8 m base (circumradius 0.47 m) before a 0.65 m slot M' closes: the route runs
+  // in the passage map M''.
+  PolygonMap map;
+  map.bounds = Box{{0, 0}, {12, 8}};
+  map.obstacles = {{{5.9, 0}, {6.1, 0}, {6.1, 3.675}, {5.9, 3.675}}, {{5.9, 4.325}, {6.1, 4.325}, {6.1, 8}, {5.9, 8}}};
+  RobotProfile robot = paperAgentProfile();
+  robot.footprint = {{0.4, -0.25}, {0.4, 0.25}, {-0.4, 0.25}, {-0.4, -0.25}};
+  ControlCycle cycle(map, robot, ControlConfig{});
+  ASSERT_TRUE(cycle.pathPlanner().hasPassageMap());
+  cycle.setGoal(Pose2{10.0, 4.0, 0.0});
+  EXPECT_FALSE(cycle.memory().route_chosen);
+  const UnicycleState at{2.0, 4.0, 0.0, 0.0, 0.0};
+  const CycleOutput out = cycle.step({at, nullptr}, PlannerBudget::expansions(300));
+  ASSERT_EQ(out.path_status, PathStatus::kFound);
+  ASSERT_TRUE(out.path_passage);
+  const ControlCycle::Memory after = cycle.memory();
+  EXPECT_TRUE(after.route_chosen);
+  EXPECT_TRUE(after.route_in_passage);
+  // The path kept for failed queries is this one, in M''.
+  EXPECT_TRUE(after.held_valid);
+  EXPECT_TRUE(after.held_passage);
+
+  CycleView v;
+  v.memory = after;
+  v.robot = at;
+  v.budget = budgetRecord(PlannerBudget::expansions(300), {});
+  v.out = &out;
+  const RecordLimits limits;
+  std::vector<std::byte> buffer(maxCycleBytes(limits));
+  const std::size_t n = encodeCycle(v, limits, buffer);
+  ASSERT_GT(n, 0u);
+  const CycleRecord c = decodeCycle(std::span<const std::byte>(buffer.data(), n), "test");
+  EXPECT_EQ(c.route_bits, 7u);
+  // Restored on a cycle that never planned (a replay from the middle of a recording).
+  ControlCycle other(map, robot, ControlConfig{});
+  other.restoreMemory(c.memory());
+  EXPECT_TRUE(other.memory().route_chosen);
+  EXPECT_TRUE(other.memory().route_in_passage);
+  EXPECT_TRUE(other.memory().held_passage);
+  // A new goal forgets it, as it forgets the searches' trees.
+  other.setGoal(Pose2{10.0, 4.0, 0.0});
+  EXPECT_FALSE(other.memory().route_chosen);
+}
+
 TEST(RecordConfigKeys, CoverEveryField) {
-  EXPECT_EQ(controlConfigKeys(ControlConfig{}).size(), 49u);
+  EXPECT_EQ(controlConfigKeys(ControlConfig{}).size(), 55u);
   EXPECT_EQ(sizeof(StaaConfig), 200u) << "StaaConfig changed: give its new field a key in record/config_keys.cpp";
   EXPECT_EQ(sizeof(HeuristicConfig), 56u) << "HeuristicConfig changed: give its new field a key";
   EXPECT_EQ(sizeof(LocalMapConfig), 48u) << "LocalMapConfig changed: give its new field a key";
-  EXPECT_EQ(sizeof(GlobalPathOptions), 48u) << "GlobalPathOptions changed: give its new field a key";
-  EXPECT_EQ(sizeof(ControlConfig), 368u) << "ControlConfig changed: give its new field a key";
+  EXPECT_EQ(sizeof(GlobalPathOptions), 80u) << "GlobalPathOptions changed: give its new field a key";
+  EXPECT_EQ(sizeof(ControlConfig), 416u) << "ControlConfig changed: give its new field a key";
 }
 
 TEST(RecordConfigKeys, TheRobotProfileReadsBackBitForBit) {

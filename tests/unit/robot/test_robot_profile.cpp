@@ -51,6 +51,9 @@ TEST(RobotProfile, ShippedPaperAgentEqualsPaperAgentProfile) {
   // 0.8 m x 0.5 m, front 0.4 m wide: area = 0.8 * (0.4 + 0.5) / 2.
   EXPECT_NEAR(signedArea(loaded.footprint), 0.36, 1e-12);
   EXPECT_NEAR(loaded.circumradius(), std::hypot(0.4, 0.25), 1e-15);
+  // The nearest edges are the slanted sides, from (0.4, +-0.2) to (-0.4, +-0.25): the origin
+  // lies 0.225 / hypot(0.8, 0.05) * 0.8 from each.
+  EXPECT_NEAR(loaded.inscribedRadius(), 0.225 * 0.8 / std::hypot(0.8, 0.05), 1e-12);
   // The body and camera staa-sim --obstacles depth gives it, the same in both.
   EXPECT_EQ(loaded.height_m, paper.height_m);
   ASSERT_TRUE(loaded.has_camera);
@@ -136,6 +139,8 @@ TEST(RobotProfile, ShippedHsrIsARound16GonOfRadius0215) {
   EXPECT_TRUE(isCounterClockwise(hsr.footprint));
   for (const Vec2& p : hsr.footprint) EXPECT_NEAR(p.norm(), 0.215, 1e-6);
   EXPECT_NEAR(hsr.circumradius(), 0.215, 1e-6);
+  // A 16-gon's edges lie cos(pi / 16) of the way out: 0.2109 m, within 5 mm of round.
+  EXPECT_NEAR(hsr.inscribedRadius(), 0.215 * std::cos(kPi / 16.0), 1e-6);
   EXPECT_NEAR(hsr.limits.v_max, 0.22, 1e-12);  // 0.8 km/h, rounded down
   EXPECT_NEAR(hsr.limits.v_min, -0.22, 1e-12);
   EXPECT_GT(hsr.limits.w_max, 0.0);
@@ -148,6 +153,7 @@ TEST(RobotProfile, ClockwiseFootprintIsStoredCounterClockwise) {
   EXPECT_TRUE(isCounterClockwise(p.footprint));
   EXPECT_EQ(p.name, "test");
   EXPECT_NEAR(p.circumradius(), std::hypot(0.3, 0.3), 1e-15);
+  EXPECT_NEAR(p.inscribedRadius(), 0.3, 1e-15);
 }
 
 TEST(RobotProfile, NameDefaultsToTheFileStem) {

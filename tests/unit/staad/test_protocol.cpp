@@ -229,6 +229,16 @@ TEST(Protocol, StatusJsonSaysWhichGoalItsStateIsAbout) {
   EXPECT_EQ(idle["queued_goal_id"], 0);
 }
 
+TEST(Protocol, StatusJsonSaysWhyAGoalIsUnreachable) {
+  Status s = filledStatus();
+  s.state = DaemonState::kUnreachable;
+  s.reason = "no passage wider than the footprint";
+  EXPECT_EQ(statusJson(s, 0)["reason"], "no passage wider than the footprint");
+  const Json driving = statusJson(Status{}, 0);
+  ASSERT_TRUE(driving.contains("reason"));
+  EXPECT_TRUE(driving["reason"].is_null());
+}
+
 TEST(Protocol, GoalIdsAreTheDaemonsNeverTheClients) {
   Request r{RequestKind::kGoal, {1.0, 2.0, 0.0}};
   r.goal_id = 5;
