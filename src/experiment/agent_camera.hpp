@@ -104,7 +104,8 @@ class AgentCamera {
   double perceptionUs() const { return perception_us_; }
 
  private:
-  static constexpr std::size_t kRing = 8;  // frames in flight: latency up to 7 frames
+  // Frames in flight: the profile's latency is at most kMaxLatencyFrames.
+  static constexpr std::size_t kRing = DepthCameraProfile::kMaxLatencyFrames + 1;
 
   DepthCameraProfile camera_;
   hal::DepthRenderer renderer_;

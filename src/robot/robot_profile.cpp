@@ -46,8 +46,10 @@ DepthCameraProfile readCamera(const io::ConfigValue& node) {
   const io::ConfigValue m = node.required("mount", "{x, y, z, roll, pitch, yaw}: the camera on the base");
   m.mapping({"x", "y", "z", "roll", "pitch", "yaw"});
   const io::Range angle = io::Range::closed(-kPi, kPi, "rad");
-  c.x = optionalNumber(m, "x", 0.0, io::Range{});
-  c.y = optionalNumber(m, "y", 0.0, io::Range{});
+  const io::Range offset = io::Range::closed(-DepthCameraProfile::kMaxMountOffsetM, DepthCameraProfile::kMaxMountOffsetM,
+                                             "m", "on the base");
+  c.x = optionalNumber(m, "x", 0.0, offset);
+  c.y = optionalNumber(m, "y", 0.0, offset);
   c.z = m.required("z", "the camera's height above the floor").number(io::Range::above(0.0, "m", "above the floor"));
   c.roll = optionalNumber(m, "roll", 0.0, angle);
   c.pitch = optionalNumber(m, "pitch", 0.0, angle);
@@ -65,7 +67,9 @@ DepthCameraProfile readCamera(const io::ConfigValue& node) {
   c.dropout = optionalNumber(node, "dropout", c.dropout, io::Range::rightOpen(0.0, 1.0, {}, "a fraction of the pixels"));
   c.grazing_deg = optionalNumber(node, "grazing_deg", c.grazing_deg, io::Range::leftOpen(0.0, 90.0, "degrees"));
   c.frame_loss = optionalNumber(node, "frame_loss", c.frame_loss, io::Range::rightOpen(0.0, 1.0, {}, "a fraction of the frames"));
-  c.latency_s = optionalNumber(node, "latency_s", c.latency_s, io::Range::closed(0.0, 1.0, "s"));
+  c.latency_s = optionalNumber(node, "latency_s", c.latency_s,
+                               io::Range::closed(0.0, std::min(1.0, DepthCameraProfile::kMaxLatencyFrames / c.rate_hz), "s",
+                                                 "at most 1 s and 7 frames at rate_hz"));
   const io::ConfigValue head = node.section("head", {"pan_max", "pan_rate", "look_ahead_m", "scan"});
   if (head.present()) {
     c.pan_max = head.required("pan_max", "how far the head pans each way, rad").number(io::Range::closed(0.0, kPi, "rad"));

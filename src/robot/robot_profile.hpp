@@ -40,8 +40,13 @@ struct DepthCameraProfile {
   double grazing_deg = 80.0;
   // Whole frames lost (the USB link), as a fraction.
   double frame_loss = 0.0;
-  // From the exposure to the obstacles in the planner (s): whole frames at rate_hz.
+  // From the exposure to the obstacles in the planner (s): whole frames at rate_hz, at most
+  // kMaxLatencyFrames (the frames staa-sim's AgentCamera keeps in flight).
   double latency_s = 0.0;
+  static constexpr int kMaxLatencyFrames = 7;
+  // How far the mount may sit from the base centre (m): a camera on the robot (perception's
+  // grid spans the range plus this offset).
+  static constexpr double kMaxMountOffsetM = 10.0;
   // The head pans towards the direction of travel (where the robot will be look_ahead_m on,
   // experiment/agent_camera.hpp) within +-pan_max (rad) at up to pan_rate (rad/s); pan_max 0:
   // a fixed camera.

@@ -129,6 +129,18 @@ TEST(RobotProfile, EachBadCameraValueNamesItsKeyLineAndValue) {
   EXPECT_THAT(errorOf(base + mount + fov + range + "  head: {pan_rate: 1}\n"), HasSubstr("camera.head.pan_max: missing"));
   EXPECT_THAT(errorOf(base + mount + fov + range + "  exposure: 3\n"), HasSubstr("camera.exposure: unknown key"));
   EXPECT_THAT(errorOf(base + fov + range), HasSubstr("camera.mount: missing"));
+  // A mount far off the base would need a perception grid beyond its bound; a latency beyond
+  // the frames staa-sim keeps in flight: both are the profile's errors, not a failed run.
+  EXPECT_THAT(errorOf(base + "  mount: {x: 11, z: 1}\n" + fov + range),
+              HasSubstr("robot.yaml:6: camera.mount.x: must be in [-10, 10] m (on the base), got 11"));
+  const std::string latency = errorOf(base + mount + fov + range + "  rate_hz: 30\n  latency_s: 0.5\n");
+  EXPECT_THAT(latency, HasSubstr("camera.latency_s: must be in [0, 0.23"));
+  EXPECT_THAT(latency, HasSubstr("7 frames at rate_hz), got 0.5"));
+  EXPECT_EQ(parseRobotProfile(withLine(kSquare, kLimits) + "camera:\n" + mount + fov + range + "  rate_hz: 10\n"
+                                  "  latency_s: 0.7\n",
+                              "r.yaml")
+                .camera.latency_s,
+            0.7);  // 7 frames at 10 Hz
   EXPECT_THAT(errorOf(withLine(kSquare, kLimits) + "height: -1\n"), HasSubstr("robot.yaml:5: height: must be > 0 m, got -1"));
 }
 
