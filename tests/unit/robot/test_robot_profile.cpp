@@ -133,6 +133,9 @@ TEST(RobotProfile, EachBadCameraValueNamesItsKeyLineAndValue) {
   // the frames staa-sim keeps in flight: both are the profile's errors, not a failed run.
   EXPECT_THAT(errorOf(base + "  mount: {x: 11, z: 1}\n" + fov + range),
               HasSubstr("robot.yaml:6: camera.mount.x: must be in [-10, 10] m (on the base), got 11"));
+  EXPECT_EQ(parseRobotProfile(withLine(kSquare, kLimits) + "camera:\n  mount: {y: -10, z: 1}\n" + fov + range, "r.yaml")
+                .camera.y,
+            -10.0);
   const std::string latency = errorOf(base + mount + fov + range + "  rate_hz: 30\n  latency_s: 0.5\n");
   EXPECT_THAT(latency, HasSubstr("camera.latency_s: must be in [0, 0.23"));
   EXPECT_THAT(latency, HasSubstr("7 frames at rate_hz), got 0.5"));
