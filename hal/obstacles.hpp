@@ -24,6 +24,9 @@ struct ObstacleFrame {
     // predicts the obstacle along that circle (StaaConfig::predict_turning). 0: going
     // straight, or not known.
     double turn_rate = 0.0;
+    // 0: seen in this frame; else how long ago (s) perception last saw it (a track kept while
+    // it is out of view, at its predicted place with its outline grown).
+    double unseen_s = 0.0;
   };
   rt::Nanos stamp = -1;          // when the frame was taken; < 0: never
   std::uint64_t sequence = 0;

@@ -1,6 +1,7 @@
 #include "experiment/results_json.hpp"
 #include "experiment/experiment.hpp"
 
+#include "experiment/agent_camera.hpp"
 #include "map/generate.hpp"
 
 #include <nlohmann/json.hpp>
@@ -36,7 +37,8 @@ std::string describe(const ExperimentRun& r) {
   std::string s = r.map + " " + toString(r.controller);
   if (r.heuristic) s += std::string(" (") + toString(*r.heuristic) + ")";
   s += std::string(" ") + toString(r.mode) + " " + std::to_string(r.agents) + (r.agents == 1 ? " agent" : " agents") +
-       " run " + std::to_string(r.run) + " (seed " + std::to_string(r.seed) + ")";
+       (r.obstacles == ObstacleSource::kTruth ? "" : std::string(" ") + toString(r.obstacles)) + " run " +
+       std::to_string(r.run) + " (seed " + std::to_string(r.seed) + ")";
   return s;
 }
 
@@ -56,6 +58,57 @@ MeanStd meanStd(const std::vector<double>& v) {
 
 
 Json meanStdJson(const MeanStd& m) { return Json{{"mean", m.mean}, {"stddev", m.stddev}}; }
+
+// The robot profile's camera as the depth runs used it.
+Json cameraJson(const RobotProfile& robot) {
+  const DepthCameraProfile& c = robot.camera;
+  Json j;
+  j["body_height_m"] = robot.height_m;
+  j["mount"] = Json{{"x", c.x}, {"y", c.y}, {"z", c.z}, {"roll", c.roll}, {"pitch", c.pitch}, {"yaw", c.yaw}};
+  j["fov_deg"] = Json::array({c.fov_h_deg, c.fov_v_deg});
+  j["range_m"] = Json::array({c.min_range_m, c.max_range_m});
+  j["rate_hz"] = c.rate_hz;
+  j["noise_mm_per_m2"] = c.noise_mm_per_m2;
+  j["dropout"] = c.dropout;
+  j["grazing_deg"] = c.grazing_deg;
+  j["frame_loss"] = c.frame_loss;
+  j["latency_s"] = c.latency_s;
+  j["head"] = Json{{"pan_max", c.pan_max}, {"pan_rate", c.pan_rate}, {"look_ahead_m", c.look_ahead_m},
+                   {"scan", c.scan}};
+  return j;
+}
+
+Json perceptionConfigJson(const DepthObstaclesConfig& p) {
+  Json j;
+  j["pixel_stride"] = p.pixel_stride;
+  j["min_depth_m"] = p.min_depth_m;
+  j["max_range_m"] = p.max_range_m;
+  j["min_height_m"] = p.min_height_m;
+  j["max_height_m"] = p.max_height_m;
+  j["cell_m"] = p.cell_m;
+  j["min_points_per_cell"] = p.min_points_per_cell;
+  j["min_cluster_points"] = p.min_cluster_points;
+  j["cluster_gap_m"] = p.cluster_gap_m;
+  j["static_margin_m"] = p.static_margin_m;
+  j["max_vertices"] = p.max_vertices;
+  j["gate_m"] = p.gate_m;
+  j["centroid_noise_m"] = p.centroid_noise_m;
+  j["acceleration_mps2"] = p.acceleration_mps2;
+  j["max_speed_mps"] = p.max_speed_mps;
+  j["turn_rate_time_s"] = p.turn_rate_time_s;
+  j["turn_min_speed_mps"] = p.turn_min_speed_mps;
+  j["max_turn_rate_rps"] = p.max_turn_rate_rps;
+  j["max_missed_frames"] = p.max_missed_frames;
+  j["keep_unseen_s"] = p.keep_unseen_s;
+  j["confirm_frames"] = p.confirm_frames;
+  j["max_growth_m"] = p.max_growth_m;
+  j["hidden_depth_m"] = p.hidden_depth_m;
+  j["self_clearance_m"] = p.self_clearance_m;
+  j["uncertainty_horizon_s"] = p.uncertainty_horizon_s;
+  j["truncated_noise_m"] = p.truncated_noise_m;
+  j["max_frame_gap_s"] = p.max_frame_gap_s;
+  return j;
+}
 
 }  // namespace
 
@@ -100,6 +153,17 @@ void validateExperimentSpec(const ExperimentSpec& spec) {
   if (spec.modes.empty()) fail("no modes");
   if (spec.agents.empty()) fail("no agent counts");
   if (spec.heuristics.empty()) fail("no heuristics");
+  if (spec.obstacles.empty()) fail("no obstacle sources");
+  if (std::find(spec.obstacles.begin(), spec.obstacles.end(), ObstacleSource::kDepth) != spec.obstacles.end()) {
+    if (!spec.robot.has_camera) fail("obstacles 'depth' needs a robot profile with a camera ('" + spec.robot.name + "' has none)");
+    try {
+      (void)agentPerceptionConfig(spec.robot);
+      validateDepthObstaclesConfig(spec.perception.value_or(agentPerceptionConfig(spec.robot)),
+                                   std::hypot(spec.robot.camera.x, spec.robot.camera.y));
+    } catch (const std::invalid_argument& e) {
+      fail(std::string("the depth camera's perception: ") + e.what());
+    }
+  }
   const int most_agents = spec.agents.empty() ? 1 : *std::max_element(spec.agents.begin(), spec.agents.end());
   for (std::size_t i = 0; i < spec.maps.size(); ++i) {
     if (spec.maps[i].map.goals.empty()) fail("map '" + spec.maps[i].name + "' has no goals");
@@ -130,6 +194,7 @@ std::vector<ExperimentRun> planExperiment(const ExperimentSpec& spec) {
   for (const ExperimentMap& map : spec.maps) {
     for (const SimMode mode : spec.modes) {
       for (const int agents : spec.agents) {
+        for (const ObstacleSource obstacles : spec.obstacles) {
         for (const ControllerKind controller : spec.controllers) {
           std::vector<std::optional<HeuristicKind>> heuristics;
           if (controller == ControllerKind::kStaa) {
@@ -144,6 +209,7 @@ std::vector<ExperimentRun> planExperiment(const ExperimentSpec& spec) {
               run.controller = controller;
               run.mode = mode;
               run.agents = agents;
+              run.obstacles = obstacles;
               run.heuristic = heuristic;
               run.run = r;
               // The same seed in every cell: run r sees the same starts and goal sequences
@@ -152,6 +218,7 @@ std::vector<ExperimentRun> planExperiment(const ExperimentSpec& spec) {
               plan.push_back(std::move(run));
             }
           }
+        }
         }
       }
     }
@@ -197,6 +264,8 @@ std::vector<ExperimentRun> runExperiment(const ExperimentSpec& spec,
       o.control = spec.control;
       o.control.rate_hz = spec.rate_hz;
       o.control.staa.heuristic.kind = run.heuristic.value_or(spec.heuristics.front());
+      o.obstacles = run.obstacles;
+      o.perception = spec.perception;
       try {
         run.result = runMultiAgent(map->map, spec.robot, o);
       } catch (const std::exception& e) {
@@ -236,7 +305,7 @@ std::vector<ExperimentCell> summarizeExperiment(const std::vector<ExperimentRun>
     for (; k < cells.size(); ++k) {
       const ExperimentCell& c = cells[k];
       if (c.map == r.map && c.controller == r.controller && c.mode == r.mode && c.agents == r.agents &&
-          c.heuristic == r.heuristic) {
+          c.obstacles == r.obstacles && c.heuristic == r.heuristic) {
         break;
       }
     }
@@ -246,6 +315,7 @@ std::vector<ExperimentCell> summarizeExperiment(const std::vector<ExperimentRun>
       c.controller = r.controller;
       c.mode = r.mode;
       c.agents = r.agents;
+      c.obstacles = r.obstacles;
       c.heuristic = r.heuristic;
       cells.push_back(std::move(c));
       members.emplace_back();
@@ -255,13 +325,17 @@ std::vector<ExperimentCell> summarizeExperiment(const std::vector<ExperimentRun>
   for (std::size_t k = 0; k < cells.size(); ++k) {
     std::vector<double> goals, collisions, score;
     double pops = 0.0;
+    ExperimentCell& c = cells[k];
     for (const ExperimentRun* r : members[k]) {
       goals.push_back(r->result.goals_reached);
       collisions.push_back(r->result.collisions);
       score.push_back(r->result.score);
       pops += r->result.expansions.mean;
+      if (r->result.perception) {
+        if (!c.perception) c.perception.emplace();
+        c.perception->merge(*r->result.perception);
+      }
     }
-    ExperimentCell& c = cells[k];
     c.runs = static_cast<int>(members[k].size());
     c.goals = meanStd(goals);
     c.collisions = meanStd(collisions);
@@ -281,6 +355,7 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
     j["controller"] = toString(r.controller);
     j["mode"] = toString(r.mode);
     j["agents"] = r.agents;
+    j["obstacles"] = toString(r.obstacles);
     j["run"] = r.run;
     j["seed"] = r.seed;
     j["duration_s"] = m.duration_s;
@@ -297,6 +372,7 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
     }
     j["agent_results"] = std::move(agents);
     j["contacts"] = contactsJson(m.contacts);
+    if (m.perception) j["perception"] = perceptionJson(*m.perception, true);
     jruns.push_back(std::move(j));
   }
 
@@ -307,12 +383,14 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
     j["controller"] = toString(c.controller);
     j["mode"] = toString(c.mode);
     j["agents"] = c.agents;
+    j["obstacles"] = toString(c.obstacles);
     j["heuristic"] = c.heuristic ? toString(*c.heuristic) : "none";
     j["runs"] = c.runs;
     j["goals_reached"] = meanStdJson(c.goals);
     j["collisions"] = meanStdJson(c.collisions);
     j["score"] = meanStdJson(c.score);
     j["expansions_mean"] = c.expansions_mean;
+    if (c.perception) j["perception"] = perceptionJson(*c.perception, false);
     summary.push_back(std::move(j));
   }
 
@@ -334,6 +412,12 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   s["modes"] = Json::array();
   for (const SimMode m : spec.modes) s["modes"].push_back(toString(m));
   s["agents"] = spec.agents;
+  s["obstacles"] = Json::array();
+  for (const ObstacleSource o : spec.obstacles) s["obstacles"].push_back(toString(o));
+  if (std::find(spec.obstacles.begin(), spec.obstacles.end(), ObstacleSource::kDepth) != spec.obstacles.end()) {
+    s["camera"] = cameraJson(spec.robot);
+    s["perception"] = perceptionConfigJson(spec.perception.value_or(agentPerceptionConfig(spec.robot)));
+  }
   s["runs"] = spec.runs;
   s["duration_s"] = spec.duration_s;
   s["rate_hz"] = spec.rate_hz;

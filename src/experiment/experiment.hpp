@@ -43,6 +43,9 @@ struct ExperimentSpec {
   std::vector<ControllerKind> controllers{ControllerKind::kPd, ControllerKind::kDwa, ControllerKind::kStaa};
   std::vector<SimMode> modes{SimMode::kCooperative, SimMode::kGhost};
   std::vector<int> agents{1, 3, 5};
+  // Where the evaluated agents' moving obstacles come from: ground truth, their depth cameras
+  // (the robot profile's camera, perception as agentPerceptionConfig), or both side by side.
+  std::vector<ObstacleSource> obstacles{ObstacleSource::kTruth};
   int runs = 3;
   double duration_s = 60.0;
   double rate_hz = 30.0;
@@ -57,6 +60,8 @@ struct ExperimentSpec {
   int jobs = 1;            // worker threads
   RobotProfile robot = paperAgentProfile();
   ControlConfig control;   // rate and heuristic are set per run from the fields above
+  // Depth runs' perception settings (empty: agentPerceptionConfig(robot)).
+  std::optional<DepthObstaclesConfig> perception;
 };
 
 // Throws std::invalid_argument naming the field and the value.
@@ -68,14 +73,15 @@ struct ExperimentRun {
   ControllerKind controller = ControllerKind::kStaa;
   SimMode mode = SimMode::kCooperative;
   int agents = 1;
+  ObstacleSource obstacles = ObstacleSource::kTruth;
   std::optional<HeuristicKind> heuristic;  // STAA* only
   int run = 0;
   std::uint64_t seed = 0;
   MultiSimResult result;
 };
 
-// Every run of the spec in a fixed order (map, mode, agents, controller, heuristic, run),
-// results empty: the same spec always gives the same list.
+// Every run of the spec in a fixed order (map, mode, agents, obstacles, controller,
+// heuristic, run), results empty: the same spec always gives the same list.
 std::vector<ExperimentRun> planExperiment(const ExperimentSpec& spec);
 
 // "pd" / "dwa" / "staa" and the heuristic ("none" for PD and DWA) as written to results.json.
@@ -102,16 +108,18 @@ struct MeanStd {
   double stddev = 0.0;
 };
 
-// One summary row: the runs of one map / controller / mode / agents / heuristic.
+// One summary row: the runs of one map / controller / mode / agents / obstacles / heuristic.
 struct ExperimentCell {
   std::string map;
   ControllerKind controller = ControllerKind::kStaa;
   SimMode mode = SimMode::kCooperative;
   int agents = 1;
+  ObstacleSource obstacles = ObstacleSource::kTruth;
   std::optional<HeuristicKind> heuristic;
   int runs = 0;
   MeanStd goals, collisions, score;
   double expansions_mean = 0.0;  // STAA* pops per call, over the runs
+  std::optional<PerceptionAccuracy> perception;  // depth: the runs' accuracy added up
 };
 
 // In the order of first appearance in `runs`.

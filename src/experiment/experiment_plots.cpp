@@ -355,7 +355,12 @@ std::string shellQuoted(const std::string& text) {
 
 }  // namespace
 
-std::string controllerScoresSvg(const std::vector<ExperimentCell>& cells, HeuristicKind staa_heuristic) {
+std::string controllerScoresSvg(const std::vector<ExperimentCell>& all_cells, HeuristicKind staa_heuristic,
+                                ObstacleSource obstacles) {
+  std::vector<ExperimentCell> cells;
+  for (const ExperimentCell& c : all_cells) {
+    if (c.obstacles == obstacles) cells.push_back(c);
+  }
   const std::vector<ControllerKind> order{ControllerKind::kPd, ControllerKind::kDwa, ControllerKind::kStaa};
   const std::vector<Series> all{{"PD", "#e08a2c"}, {"DWA", "#5b7fc7"}, {"STAA*", "#2a9d6a"}};
   std::vector<ControllerKind> present;
@@ -374,7 +379,47 @@ std::string controllerScoresSvg(const std::vector<ExperimentCell>& cells, Heuris
     return static_cast<int>(indexOf(present, c.controller));
   });
   f.title = std::string("Controllers: score = goals reached - collisions (black), mean of ") + runsNote(cells) +
-            "; STAA* with " + toString(staa_heuristic);
+            "; STAA* with " + toString(staa_heuristic) +
+            (obstacles == ObstacleSource::kTruth ? std::string() : "; obstacles from " + std::string(toString(obstacles)));
+  return renderFigure(f);
+}
+
+std::string obstacleScoresSvg(const std::vector<ExperimentCell>& cells, HeuristicKind staa_heuristic) {
+  struct Kind {
+    ControllerKind controller;
+    ObstacleSource obstacles;
+    Series series;
+  };
+  const std::vector<Kind> order{
+      {ControllerKind::kPd, ObstacleSource::kTruth, {"PD truth", "#e08a2c"}},
+      {ControllerKind::kPd, ObstacleSource::kDepth, {"PD depth", "#f3c797"}},
+      {ControllerKind::kDwa, ObstacleSource::kTruth, {"DWA truth", "#5b7fc7"}},
+      {ControllerKind::kDwa, ObstacleSource::kDepth, {"DWA depth", "#b3c4e6"}},
+      {ControllerKind::kStaa, ObstacleSource::kTruth, {"STAA* truth", "#2a9d6a"}},
+      {ControllerKind::kStaa, ObstacleSource::kDepth, {"STAA* depth", "#96d8b8"}},
+  };
+  std::vector<std::size_t> present;
+  std::vector<Series> series;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    for (const ExperimentCell& c : cells) {
+      if (c.controller == order[i].controller && c.obstacles == order[i].obstacles) {
+        present.push_back(i);
+        series.push_back(order[i].series);
+        break;
+      }
+    }
+  }
+  Figure f = layoutFigure(cells, series, [&](const ExperimentCell& c) {
+    if (c.controller == ControllerKind::kStaa && c.heuristic && *c.heuristic != staa_heuristic) return -1;
+    for (std::size_t s = 0; s < present.size(); ++s) {
+      if (order[present[s]].controller == c.controller && order[present[s]].obstacles == c.obstacles) {
+        return static_cast<int>(s);
+      }
+    }
+    return -1;
+  });
+  f.title = "Ground truth beside depth perception: score = goals reached - collisions (black), mean of " +
+            runsNote(cells) + "; STAA* with " + toString(staa_heuristic);
   return renderFigure(f);
 }
 
@@ -417,8 +462,10 @@ ExperimentPlots writeExperimentPlots(const fs::path& dir, const ExperimentSpec& 
     plots.files.push_back(file);
   };
   const HeuristicKind first = spec.heuristics.empty() ? HeuristicKind::kPathRtr : spec.heuristics.front();
-  save(dir / "scores.svg", controllerScoresSvg(cells, first));
+  const ObstacleSource source = spec.obstacles.empty() ? ObstacleSource::kTruth : spec.obstacles.front();
+  save(dir / "scores.svg", controllerScoresSvg(cells, first, source));
   if (spec.heuristics.size() > 1) save(dir / "heuristics.svg", heuristicScoresSvg(cells));
+  if (spec.obstacles.size() > 1) save(dir / "obstacles.svg", obstacleScoresSvg(cells, first));
 
   const std::optional<fs::path> converter = findOnPath("rsvg-convert");
   if (!converter) {

@@ -1,6 +1,7 @@
 #include "experiment/multi_sim.hpp"
 
 #include "control/dwa_controller.hpp"
+#include "experiment/agent_camera.hpp"
 #include "control/pd_controller.hpp"
 #include "geometry/splitmix64.hpp"
 #include "record/recorder.hpp"
@@ -65,6 +66,8 @@ std::uint64_t streamSeed(std::uint64_t seed, std::uint64_t stream) {
 }
 
 constexpr std::size_t kStartStream = 0;
+// The cameras' noise streams: one per agent, apart from the goal streams (1 + agent).
+constexpr std::size_t kCameraStream = 1u << 20;
 constexpr int kHeadingTries = 16;
 
 struct SimAgent {
@@ -81,6 +84,7 @@ struct SimAgent {
   AgentResult result;
   double last_speed = 0.0;  // |v| when this cycle's command was decided
   int last_tier = -1;       // this cycle's STAA* braking-safety tier (-1: none)
+  std::unique_ptr<AgentCamera> camera;          // ObstacleSource::kDepth, perceiving agents
 
   explicit SimAgent(std::size_t capacity) : seen(capacity) {}
 };
@@ -207,6 +211,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   config.staa.heuristic.stop_at_goal = false;
 
   MultiWorld world(map, robot);
+  const bool by_camera = options.obstacles == ObstacleSource::kDepth;
+  const DepthObstaclesConfig perception =
+      by_camera ? options.perception.value_or(agentPerceptionConfig(robot)) : DepthObstaclesConfig{};
   std::vector<std::unique_ptr<SimAgent>> agents;
   agents.reserve(n);
   // Every agent plans against all the others: the capacity is raised to them if it is lower.
@@ -224,6 +231,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       a->controller = std::make_unique<DwaController>(robot, config.local);
     }
     a->cycle->setLocalController(a->controller.get());
+    if (options.obstacles == ObstacleSource::kDepth && a->perceives) {
+      a->camera = std::make_unique<AgentCamera>(map, robot, perception, streamSeed(options.seed, kCameraStream + i));
+    }
     agents.push_back(std::move(a));
   }
   if (options.starts.empty()) {
@@ -237,12 +247,19 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   for (std::size_t i = 0; i < n; ++i) assignNextGoal(map, options, i, world.agent(i).pose.position(), *agents[i], true);
 
   // Scratch for the perception seam and the commands, sized once.
-  std::vector<PolygonView> views(n);
-  std::vector<Vec2> velocities(n);
-  std::vector<double> turn_rates(n);
+  // (a camera's frame holds up to ObstacleFrame::kMaxObstacles)
+  const std::size_t seam = std::max(n, hal::ObstacleFrame::kMaxObstacles);
+  std::vector<PolygonView> views(seam);
+  std::vector<Vec2> velocities(seam);
+  std::vector<double> turn_rates(seam);
   std::vector<AgentCommand> commands(n);
   std::vector<Vec2> current_goals(options.on_step_goals ? n : 0);
   std::vector<int> episodes_before(n, 0);
+  // Depth: the other bodies as prisms, their pixels in a frame, the scorer.
+  std::vector<hal::PrismView> prisms(n);
+  std::vector<std::size_t> others(n);
+  std::vector<std::uint32_t> pixels(n);
+  PerceptionScorer scorer(by_camera ? n : 0);
   std::unique_ptr<record::SimRecording> recording;
   if (!options.record_path.empty()) {
     record::Session session = options.record_session;
@@ -253,7 +270,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       session.agents.push_back({static_cast<std::uint16_t>(i), agents[i]->controller ? agents[i]->controller->name() : "staa"});
     }
     record::RecordLimits limits;
-    limits.obstacles = std::max<std::size_t>(1, n - 1);
+    // Depth: what perception made of a frame (up to ObstacleFrame's obstacles and vertices).
+    limits.obstacles = by_camera ? seam : std::max<std::size_t>(1, n - 1);
+    if (by_camera) limits.vertices = std::max(limits.vertices, hal::ObstacleFrame::kMaxVertices);
     limits.vertices = std::max<std::size_t>(limits.vertices, robot.footprint.size());
     limits.path_points = 4096;
     limits.trajectory = 256;
@@ -272,10 +291,36 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     // Every agent decides on the same snapshot of the world.
     for (std::size_t i = 0; i < n; ++i) {
       SimAgent& a = *agents[i];
-      std::size_t m = 0;  // the others seen
-      if (a.perceives) {
-        // The seam where real perception will come in: the others' footprints, velocities and
-        // turn rates.
+      std::size_t m = 0;  // the others seen: what the planner gets (and the recorder keeps)
+      if (a.perceives && a.camera) {
+        // What its camera saw: a frame rendered now, its obstacles once they have arrived.
+        std::size_t bodies = 0;
+        for (std::size_t j = 0; j < n; ++j) {
+          if (j == i) continue;
+          prisms[bodies] = hal::PrismView{PolygonView(world.footprint(j)), Vec2(0.0, 0.0), robot.height_m};
+          others[bodies] = j;
+          ++bodies;
+        }
+        const double now = world.time();
+        if (a.camera->perceive(now, world.agent(i).pose, std::span<const hal::PrismView>(prisms.data(), bodies),
+                               std::span<std::uint32_t>(pixels.data(), bodies))) {
+          scorer.score(world, i, now, a.camera->frame(), std::span<const std::size_t>(others.data(), bodies),
+                       std::span<const std::uint32_t>(pixels.data(), bodies));
+          scorer.addCost(a.camera->renderUs(), a.camera->perceptionUs());
+        }
+        if (options.on_perceived) options.on_perceived(i, a.camera->delivered(now), a.camera->pan());
+        if (const hal::ObstacleFrame* f = a.camera->delivered(now)) {
+          for (std::size_t o = 0; o < f->count; ++o) {
+            views[m] = PolygonView(f->obstacles[o].vertices.data(), f->obstacles[o].n);
+            velocities[m] = f->obstacles[o].velocity;
+            turn_rates[m] = f->obstacles[o].turn_rate;
+            ++m;
+          }
+        }
+        a.seen.set(std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m),
+                   std::span<const double>(turn_rates.data(), m));
+      } else if (a.perceives) {
+        // Ground truth: the others' footprints, velocities and turn rates.
         for (std::size_t j = 0; j < n; ++j) {
           if (j == i) continue;
           views[m] = world.footprint(j);
@@ -298,11 +343,17 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
         budget = rec.before(*a.cycle, options.budget, &steadyClockNs);
       }
       const CycleOutput out = a.cycle->step(in, budget);
-      if (recording) {
-        recording->agent(i).after(*a.cycle, record::simNanos(world.time()), in.robot, record::StepKind::kStepped, 0, &out,
-                                  {out.v_cmd, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
-      }
       commands[i] = AgentCommand{out.v_cmd, out.w_cmd};
+      if (a.camera) {
+        // The head turns to where the controller wants to go; the speed goes there once seen.
+        commands[i].v = a.camera->limitSpeed(world.time(), rs.pose, out.v_cmd, out.w_cmd);
+        a.camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, a.cycle->lastPath(), period);
+      }
+      if (recording) {
+        // The command to the base is the camera's limited one; the cycle's own is beside it.
+        recording->agent(i).after(*a.cycle, record::simNanos(world.time()), in.robot, record::StepKind::kStepped, 0, &out,
+                                  {commands[i].v, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
+      }
       a.last_speed = std::abs(rs.v);
       a.last_tier = out.planned && a.evaluated && !a.controller ? out.plan.brake_safety_tier : -1;
       if (options.on_cycle) options.on_cycle(i, out);
@@ -380,6 +431,13 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   result.plan_us = distributionOf(plan_us);
   result.depth_mean = distributionOf(depth).mean;
   result.finished_early_ratio = result.calls > 0 ? static_cast<double>(early) / result.calls : 0.0;
+  if (by_camera) {
+    PerceptionAccuracy accuracy = scorer.accuracy();
+    for (const auto& a : agents) {
+      if (a->camera) accuracy.frames_lost += a->camera->framesLost();
+    }
+    result.perception = std::move(accuracy);
+  }
   return result;
 }
 

@@ -10,12 +10,17 @@
 //                their shortest path with the PD controller, pass through each other and
 //                through agent 0, and only agent 0's collisions count (walls and ghosts).
 //
-// The agents see each other through a DynamicObstacleSet built from the simulation (ground
-// truth); real perception can replace that seam later. Deterministic for a given seed with
+// The agents see each other through a DynamicObstacleSet: built from the simulation (ground
+// truth: every other agent's exact polygon, velocity and turn rate), or with
+// ObstacleSource::kDepth from what each evaluated agent's depth camera sees, through the same
+// perception code as staad (experiment/agent_camera.hpp). Deterministic for a given seed with
 // an expansion budget. How contacts are resolved (agents stop at the last free point of
 // their motion and can always back away): sim/multi_world.hpp.
 
 #include "control/control_cycle.hpp"
+#include "experiment/obstacle_source.hpp"
+#include "experiment/perception_score.hpp"
+#include "perception/depth_obstacles.hpp"
 #include "planner/budget.hpp"
 #include "map/polygon_map.hpp"
 #include "planner/heuristic.hpp"
@@ -49,6 +54,10 @@ struct MultiSimOptions {
   std::uint64_t seed = 1;          // start poses and goal sequences
   double goal_radius_m = 0.5;      // a goal counts as reached within this distance
   ControlConfig control;           // heuristic kind in control.staa.heuristic.kind
+  ObstacleSource obstacles = ObstacleSource::kTruth;
+  // kDepth: perception's settings (empty: agentPerceptionConfig of the robot profile, whose
+  // camera section mounts the camera).
+  std::optional<DepthObstaclesConfig> perception;
   // Called once per simulated second (progress); may be empty.
   std::function<void(double sim_time_s)> on_second;
 
@@ -65,8 +74,12 @@ struct MultiSimOptions {
   std::function<void(const MultiWorld& world, std::span<const Vec2> current_goals, int cycle)> on_step_goals;
   // Called after every agent's control cycle with what it decided (diagnostics); may be empty.
   std::function<void(std::size_t agent, const CycleOutput& out)> on_cycle;
+  // kDepth: called before every camera agent's control cycle with the obstacle frame its
+  // planner gets (null before the first has arrived) and its head's pan (diagnostics).
+  std::function<void(std::size_t agent, const hal::ObstacleFrame* frame, double pan)> on_perceived;
   // Every agent's cycles recorded into this MCAP file, the contacts beside them (staa-sim
-  // --record; empty: off). The runner completes the session.
+  // --record; empty: off). kDepth: the obstacles recorded are those perception gave the
+  // planner. The runner completes the session.
   std::filesystem::path record_path;
   record::Session record_session;
 };
@@ -105,6 +118,8 @@ struct MultiSimResult {
   double depth_mean = 0.0;
   Distribution plan_us;
   std::vector<ContactRecord> contacts;  // the counted contact episodes, in time order
+  // kDepth: how well the evaluated agents' perception saw the others.
+  std::optional<PerceptionAccuracy> perception;
 };
 
 // Runs the agents on `map` (which must have goals). Throws std::invalid_argument for bad

@@ -1,5 +1,6 @@
 #include "experiment/sim_runner.hpp"
 
+#include "experiment/agent_camera.hpp"
 #include "record/recorder.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
@@ -7,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <numeric>
 
 namespace staa {
@@ -31,6 +33,23 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   std::vector<Polygon> mover_polys(world.moverCount());
   std::vector<PolygonView> views(world.moverCount());
   std::vector<Vec2> velocities(world.moverCount());
+  // Depth: the robot's camera sees the movers as people 1.7 m tall; perception bounds their
+  // speed by the fastest of them.
+  constexpr double kPersonHeightM = 1.7;
+  std::unique_ptr<AgentCamera> camera;
+  std::vector<hal::PrismView> prisms(world.moverCount());
+  std::vector<PolygonView> seen_views(hal::ObstacleFrame::kMaxObstacles);
+  std::vector<Vec2> seen_velocities(hal::ObstacleFrame::kMaxObstacles);
+  std::vector<double> seen_turn_rates(hal::ObstacleFrame::kMaxObstacles);
+  std::size_t seen = 0;  // obstacles in the seen_ spans this cycle
+  if (options.obstacles == ObstacleSource::kDepth) {
+    DepthObstaclesConfig perception = agentPerceptionConfig(scenario.robot);
+    double fastest = 0.0;
+    for (std::size_t i = 0; i < world.moverCount(); ++i) fastest = std::max(fastest, world.mover(i).speed);
+    perception.max_speed_mps = std::max(perception.max_speed_mps, 1.25 * fastest);
+    perception.acceleration_mps2 = std::max(perception.acceleration_mps2, 1.0);
+    camera = std::make_unique<AgentCamera>(scenario.map, scenario.robot, perception, 1);
+  }
   std::unique_ptr<record::SimRecording> recording;
   if (!options.record_path.empty()) {
     record::Session session = options.record_session;
@@ -39,7 +58,10 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     session.map = scenario.map;
     session.agents = {{0, options.controller != nullptr ? options.controller->name() : "staa"}};
     record::RecordLimits limits;
+    // Depth: what perception made of a frame (up to ObstacleFrame's obstacles and vertices).
     limits.obstacles = std::max<std::size_t>(1, world.moverCount());
+    if (camera) limits.obstacles = std::max(limits.obstacles, hal::ObstacleFrame::kMaxObstacles);
+    if (camera) limits.vertices = std::max(limits.vertices, hal::ObstacleFrame::kMaxVertices);
     for (std::size_t i = 0; i < world.moverCount(); ++i) limits.vertices = std::max(limits.vertices, world.moverPolygon(i).size());
     limits.path_points = 4096;
     limits.trajectory = 256;
@@ -58,20 +80,47 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
       views[i] = mover_polys[i];
       velocities[i] = world.moverVelocity(i);
     }
-    obstacles.set(views, velocities);
+    if (camera) {
+      for (std::size_t i = 0; i < world.moverCount(); ++i) {
+        prisms[i] = hal::PrismView{views[i], Vec2(0.0, 0.0), kPersonHeightM};
+      }
+      camera->perceive(world.time(), world.robot().pose, prisms);
+      seen = 0;
+      if (const hal::ObstacleFrame* f = camera->delivered(world.time())) {
+        for (; seen < f->count; ++seen) {
+          seen_views[seen] = PolygonView(f->obstacles[seen].vertices.data(), f->obstacles[seen].n);
+          seen_velocities[seen] = f->obstacles[seen].velocity;
+          seen_turn_rates[seen] = f->obstacles[seen].turn_rate;
+        }
+      }
+      obstacles.set(std::span<const PolygonView>(seen_views.data(), seen),
+                    std::span<const Vec2>(seen_velocities.data(), seen),
+                    std::span<const double>(seen_turn_rates.data(), seen));
+    } else {
+      obstacles.set(views, velocities);
+    }
     const RobotState& rs = world.robot();
     CycleInputs in;
     in.robot = UnicycleState{rs.pose.x, rs.pose.y, rs.pose.theta, rs.v, rs.w};
     in.obstacles = &obstacles;
     PlannerBudget budget = options.budget.make();
     if (recording) {
-      recording->agent(0).obstacles({views, velocities, {}});
+      recording->agent(0).obstacles(camera ? record::ObstacleInputs{std::span<const PolygonView>(seen_views.data(), seen),
+                                                                    std::span<const Vec2>(seen_velocities.data(), seen),
+                                                                    std::span<const double>(seen_turn_rates.data(), seen)}
+                                           : record::ObstacleInputs{views, velocities, {}});
       budget = recording->agent(0).before(cycle, options.budget, &steadyClockNs);
     }
     const CycleOutput out = cycle.step(in, budget);
+    double v_cmd = out.v_cmd;
+    if (camera) {
+      v_cmd = camera->limitSpeed(world.time(), rs.pose, out.v_cmd, out.w_cmd);
+      camera->aimHead(rs.pose, out.v_cmd, out.w_cmd, cycle.lastPath(), period);
+    }
     if (recording) {
+      // The command to the base is the camera's limited one; the cycle's own is beside it.
       recording->agent(0).after(cycle, record::simNanos(world.time()), in.robot, record::StepKind::kStepped, 0, &out,
-                                {out.v_cmd, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
+                                {v_cmd, out.w_cmd, false, out.v_cmd, out.w_cmd, false});
     }
     result.trace.push_back(rs.pose);
     if (out.planned) {
@@ -100,7 +149,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
       result.time_to_goal_s = world.time();
       break;
     }
-    world.step(period, out.v_cmd, out.w_cmd);
+    world.step(period, v_cmd, out.w_cmd);
   }
   if (recording) recording->close();
   result.duration_s = world.time();
@@ -108,6 +157,10 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   result.collisions = world.collisionEpisodes();
   result.min_clearance_m = world.minClearance();
   result.final_pose = world.robot().pose;
+  if (camera) {
+    result.camera_frames = camera->frames();
+    result.camera_frames_lost = camera->framesLost();
+  }
   result.expansions = distributionOf(pops);
   result.successors = distributionOf(succ);
   result.depth = distributionOf(depth);

@@ -1,14 +1,17 @@
 #pragma once
 // One robot driven by the control cycle through a simulated world (staa-sim without
-// --agents): the cycle sees the world's state and its movers (ground truth for now; the
-// perception seam is the DynamicObstacleSet it is handed), its command drives the world for
-// one control period, until the goal is reached or the time is up.
+// --agents): the cycle sees the world's state and its movers (ground truth, or with
+// ObstacleSource::kDepth what the robot profile's depth camera sees of them, as people 1.7 m
+// tall, through staad's perception: experiment/agent_camera.hpp), its command drives the
+// world for one control period, until the goal is reached or the time is up.
 
 #include "control/control_cycle.hpp"
+#include "experiment/obstacle_source.hpp"
 #include "planner/budget.hpp"
 #include "record/recording.hpp"
 #include "world/world.hpp"
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -25,6 +28,7 @@ struct SimOptions {
   ControlConfig control;
   // A baseline local controller in place of STAA* (not owned; null: STAA*).
   LocalController* controller = nullptr;
+  ObstacleSource obstacles = ObstacleSource::kTruth;
   std::filesystem::path svg_dir;  // empty: no frames
   int svg_every = 15;             // cycles between frames
   // Called after each cycle (progress, tests); may be empty.
@@ -62,6 +66,8 @@ struct SimResult {
   Distribution path_us;
   std::vector<Pose2> trace;      // the robot's pose every cycle
   int frames_written = 0;
+  std::uint64_t camera_frames = 0;  // depth: frames perceived (and lost)
+  std::uint64_t camera_frames_lost = 0;
 };
 
 // Runs the scenario's robot from its start to its goal.

@@ -1,6 +1,7 @@
 #include "perception/depth_obstacles.hpp"
 
 #include "geometry/convex.hpp"
+#include "geometry/polygon.hpp"
 #include "io/config_rules.hpp"
 
 #include <algorithm>
@@ -34,13 +35,13 @@ std::string number(double v) { return io::numberText(v); }
 
 // The constant-velocity Kalman filter of a track (the same gain for x and y): predict over
 // dt with white acceleration noise, then update with the measured centroid.
-void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, double dt) const {
+void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, double dt, double noise_m) const {
   const double q = config_.acceleration_mps2 * config_.acceleration_mps2;
   const double dt2 = dt * dt;
   const double p00 = tr.p00 + 2.0 * dt * tr.p01 + dt2 * tr.p11 + q * dt2 * dt2 / 4.0;
   const double p01 = tr.p01 + dt * tr.p11 + q * dt2 * dt / 2.0;
   const double p11 = tr.p11 + q * dt2;
-  const double innovation_var = p00 + config_.centroid_noise_m * config_.centroid_noise_m;
+  const double innovation_var = p00 + noise_m * noise_m;
   const double k0 = p00 / innovation_var, k1 = p01 / innovation_var;
   const Vec2 innovation = measured - (tr.centroid + tr.velocity * dt);
   tr.centroid += tr.velocity * dt + k0 * innovation;
@@ -94,12 +95,19 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_o
                static_cast<long long>(hal::ObstacleFrame::kMaxVertices), " (ObstacleFrame::kMaxVertices)");
   require("gate_m", c.gate_m, Range::above(0.0, "m"));
   require("centroid_noise_m", c.centroid_noise_m, Range::above(0.0, "m"));
+  require("truncated_noise_m", c.truncated_noise_m, Range::above(0.0, "m"));
   require("acceleration_mps2", c.acceleration_mps2, Range::above(0.0, "m/s^2"));
   require("max_speed_mps", c.max_speed_mps, Range::above(0.0, "m/s"));
   require("turn_rate_time_s", c.turn_rate_time_s, Range::above(0.0, "s"));
   require("turn_min_speed_mps", c.turn_min_speed_mps, Range::atLeast(0.0, "m/s"));
   require("max_turn_rate_rps", c.max_turn_rate_rps, Range::atLeast(0.0, "rad/s"));
   requireCount("max_missed_frames", c.max_missed_frames, 0, 1000);
+  require("keep_unseen_s", c.keep_unseen_s, Range::closed(0.0, 60.0, "s"));
+  requireCount("confirm_frames", c.confirm_frames, 1, 1000);
+  require("max_growth_m", c.max_growth_m, Range::closed(0.0, 10.0, "m"));
+  require("hidden_depth_m", c.hidden_depth_m, Range::closed(0.0, 5.0, "m"));
+  require("self_clearance_m", c.self_clearance_m, Range::closed(0.0, 5.0, "m"));
+  require("uncertainty_horizon_s", c.uncertainty_horizon_s, Range::closed(0.0, 10.0, "s"));
   require("max_frame_gap_s", c.max_frame_gap_s, Range::above(0.0, "s"));
 }
 
@@ -118,8 +126,12 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   const std::size_t sampled =
       static_cast<std::size_t>((hal::DepthFrame::kWidth / config_.pixel_stride + 1) *
                                (hal::DepthFrame::kHeight / config_.pixel_stride + 1));
-  rays_.reserve(sampled);
-  frame_rays_.reserve(sampled);
+  const std::size_t edge_rays = 2 * static_cast<std::size_t>(hal::DepthFrame::kHeight / config_.pixel_stride + 1);
+  for (Rays* r : {&rays_, &frame_rays_}) {
+    r->rays.reserve(sampled);
+    r->edge.reserve(edge_rays);
+  }
+  edge_cells_.reserve(edge_rays);
   fillRays(camera_.rotation(), camera_.position(), rays_);
   // The grid reaches max_range_m from the camera wherever the camera sits on the robot
   // (within kMaxGridSide: validated above).
@@ -128,6 +140,7 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   link_ = static_cast<int>(std::floor(config_.cluster_gap_m / config_.cell_m + 1e-9));
   const auto cells = static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_);
   count_.assign(cells, 0);
+  edge_.assign(cells, 0);
   sum_x_.assign(cells, 0.0F);
   sum_y_.assign(cells, 0.0F);
   label_.assign(cells, -1);
@@ -136,12 +149,15 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   row_max_.assign(static_cast<std::size_t>(n_), -1);
   rows_.assign(static_cast<std::size_t>(n_), 0);
   corners_.assign(4 * static_cast<std::size_t>(n_), Vec2::Zero());
-  hull_.assign(4 * static_cast<std::size_t>(n_) + 1, Vec2::Zero());
+  hull_.assign(std::max<std::size_t>(4 * static_cast<std::size_t>(n_) + 1, 2 * hal::ObstacleFrame::kMaxVertices + 1),
+               Vec2::Zero());
+  extended_.assign(2 * hal::ObstacleFrame::kMaxVertices, Vec2::Zero());
 }
 
 // The sampled rays and, per ray, the depths whose points are in the band and in range.
-void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3& c, std::vector<Ray>& out) const {
-  out.clear();
+void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3& c, Rays& out) const {
+  out.rays.clear();
+  out.edge.clear();
   const int s = config_.pixel_stride;
   for (int v = s / 2; v < hal::DepthFrame::kHeight; v += s) {
     for (int u = s / 2; u < hal::DepthFrame::kWidth; u += s) {
@@ -162,9 +178,10 @@ void DepthObstacleDetector::fillRays(const Eigen::Matrix3d& rotation, const Vec3
       const double lo_mm = std::max(1.0, std::ceil(lo * 1000.0));
       const double hi_mm = std::min(65535.0, std::floor(hi * 1000.0));
       if (lo_mm > hi_mm) continue;  // this pixel never sees anything in the band
-      out.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
-                        static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u), static_cast<std::uint16_t>(lo_mm),
-                        static_cast<std::uint16_t>(hi_mm)});
+      if (u < s || u >= hal::DepthFrame::kWidth - s) out.edge.push_back(static_cast<std::uint32_t>(out.rays.size()));
+      out.rays.push_back(Ray{static_cast<float>(r.x()), static_cast<float>(r.y()),
+                             static_cast<std::uint32_t>(v * hal::DepthFrame::kWidth + u),
+                             static_cast<std::uint16_t>(lo_mm), static_cast<std::uint16_t>(hi_mm)});
     }
   }
 }
@@ -181,7 +198,8 @@ void DepthObstacleDetector::useFrameMount(const hal::CameraMount& m) {
   const bool finite = std::isfinite(m.x) && std::isfinite(m.y) && std::isfinite(m.z) && std::isfinite(m.roll) &&
                       std::isfinite(m.pitch) && std::isfinite(m.yaw);
   if (!finite || !(m.z > 0.0)) {
-    frame_rays_.clear();
+    frame_rays_.rays.clear();
+    frame_rays_.edge.clear();
     return;
   }
   fillRays(CameraModel::rotationOf(m), frame_position_, frame_rays_);
@@ -201,37 +219,57 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
   out.dropped = 0;
   if (frame.has_mount) {
     useFrameMount(frame.mount);
+    frame_rotation_ = CameraModel::rotationOf(frame.mount);
+    frame_camera_ = frame_position_;
     backProject(frame, frame_rays_, frame_position_, robot, stats);
   } else {
+    frame_rotation_ = camera_.rotation();
+    frame_camera_ = camera_.position();
     backProject(frame, rays_, camera_.position(), robot, stats);
   }
+  robot_ = robot.position();
   findClusters(robot, stats);
   outlineClusters(out);
   trackClusters(frame.stamp, out);
-  out.dropped = stats.clusters - out.count;
+  out.dropped = stats.clusters - kept_;
+  keepUnseenTracks(frame, robot, out);
   for (const Track& t : tracks_) stats.tracks += t.live ? 1 : 0;
   return stats;
 }
 
 // Step 1: pixels -> points in the band -> counts (and point sums) per grid cell.
-void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std::vector<Ray>& rays,
-                                        const Vec3& camera_position, const Pose2& robot, DepthObstaclesStats& stats) {
+void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const Rays& rays, const Vec3& camera_position,
+                                        const Pose2& robot, DepthObstaclesStats& stats) {
   const double cell = config_.cell_m;
   gi0_ = mask_.cellIndex(robot.x) - n_ / 2;
   gj0_ = mask_.cellIndex(robot.y) - n_ / 2;
   origin_ = Vec2(static_cast<double>(gi0_) * cell, static_cast<double>(gj0_) * cell);
   std::fill(count_.begin(), count_.end(), std::uint16_t{0});
+  for (const std::uint32_t k : edge_cells_) edge_[k] = 0;
+  edge_cells_.clear();
   std::fill(sum_x_.begin(), sum_x_.end(), 0.0F);
   std::fill(sum_y_.begin(), sum_y_.end(), 0.0F);
 
   // In grid units: the camera's position, and each ray's turn by the robot's heading.
   const double inv_cell = 1.0 / cell;
   const Vec2 camera = robot.transform(camera_position.head<2>());
+  camera_map_ = camera;
   const double ax = (camera.x() - origin_.x()) * inv_cell, ay = (camera.y() - origin_.y()) * inv_cell;
   const double c = std::cos(robot.theta) * inv_cell * 0.001, s = std::sin(robot.theta) * inv_cell * 0.001;
   const double n = n_;
   std::size_t points = 0;
-  for (const Ray& r : rays) {
+  // The cell of ray r's point, or -1 when its depth is outside its band or the grid.
+  const auto cellOf = [&](const Ray& r) -> std::ptrdiff_t {
+    const std::uint16_t d_mm = frame.depth_mm[r.pixel];
+    if (d_mm < r.min_mm || d_mm > r.max_mm) return -1;
+    const double d = d_mm;
+    const double gx = ax + d * (c * r.x - s * r.y);
+    const double gy = ay + d * (s * r.x + c * r.y);
+    if (!(gx >= 0.0 && gx < n && gy >= 0.0 && gy < n)) return -1;
+    return static_cast<std::ptrdiff_t>(static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) +
+                                       static_cast<std::size_t>(gx));
+  };
+  for (const Ray& r : rays.rays) {
     const std::uint16_t d_mm = frame.depth_mm[r.pixel];
     if (d_mm < r.min_mm || d_mm > r.max_mm) continue;
     const double d = d_mm;
@@ -244,6 +282,14 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const std:
     sum_x_[k] += static_cast<float>(gx);
     sum_y_[k] += static_cast<float>(gy);
     ++points;
+  }
+  // The cells of the points from the image's side columns (a few hundred rays): a cluster
+  // with one of them is cut off by the edge.
+  for (const std::uint32_t i : rays.edge) {
+    const std::ptrdiff_t k = cellOf(rays.rays[i]);
+    if (k < 0 || edge_[static_cast<std::size_t>(k)] != 0) continue;
+    edge_[static_cast<std::size_t>(k)] = 1;
+    edge_cells_.push_back(static_cast<std::uint32_t>(k));
   }
   stats.points = points;
 }
@@ -277,9 +323,11 @@ void DepthObstacleDetector::findClusters(const Pose2& robot, DepthObstaclesStats
     queue_[tail++] = seed;
     std::uint64_t points = 0;
     double sx = 0.0, sy = 0.0;
+    bool truncated = false;
     for (std::uint32_t head = first; head < tail; ++head) {
       const std::uint32_t k = queue_[head];
       points += count_[k];
+      truncated = truncated || edge_[k] != 0;
       sx += sum_x_[k];
       sy += sum_y_[k];
       const int gx = static_cast<int>(k % static_cast<std::uint32_t>(n));
@@ -306,6 +354,7 @@ void DepthObstacleDetector::findClusters(const Pose2& robot, DepthObstaclesStats
     cl.centroid = origin_ + config_.cell_m * Vec2(sx * inv, sy * inv);
     cl.distance = (cl.centroid - robot.position()).norm();
     cl.track = -1;
+    cl.truncated = truncated;
   }
 
   // The nearest kMaxObstacles, nearest first (ties in scan order, so the result is the same
@@ -362,6 +411,18 @@ std::size_t DepthObstacleDetector::outline(const Cluster& cluster, std::span<Vec
   }
   std::size_t hull_n = convexHullInPlace(std::span<Vec2>(corners_.data(), m), std::span<Vec2>(hull_));
   hull_n = growToFewerVertices(std::span<Vec2>(hull_), hull_n, config_.max_vertices);
+  const Vec2 away = cluster.centroid - camera_map_;
+  if (config_.hidden_depth_m > 0.0 && hull_n > 0 && away.norm() > 0.0) {
+    // The side the camera cannot see: the outline and its copy shifted away from the camera.
+    const Vec2 shift = away.normalized() * config_.hidden_depth_m;
+    const std::size_t k = std::min(hull_n, extended_.size() / 2);
+    for (std::size_t i = 0; i < k; ++i) {
+      extended_[i] = hull_[i];
+      extended_[k + i] = hull_[i] + shift;
+    }
+    hull_n = convexHullInPlace(std::span<Vec2>(extended_.data(), 2 * k), std::span<Vec2>(hull_));
+    hull_n = growToFewerVertices(std::span<Vec2>(hull_), hull_n, config_.max_vertices);
+  }
   hull_n = std::min(hull_n, out.size());
   std::copy_n(hull_.begin(), hull_n, out.begin());
   return hull_n;
@@ -374,6 +435,7 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
                            static_cast<double>(stamp - last_stamp_) * 1e-9 > config_.max_frame_gap_s)) {
     resetTracks();
   }
+  const rt::Nanos previous_stamp = last_stamp_;  // -1 after a reset: no track is older
   last_stamp_ = stamp;
 
   std::array<Vec2, kMaxTracks> predicted{};
@@ -385,9 +447,17 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
   }
   for (std::size_t i = 0; i < kept_; ++i) clusters_[order_[i]].track = -1;
 
-  const double gate2 = config_.gate_m * config_.gate_m;
+  // The gate: gate_m, grown with the uncertainty of a track unseen for a frame or more.
+  std::array<double, kMaxTracks> gate2{};
+  for (std::size_t t = 0; t < kMaxTracks; ++t) {
+    if (!tracks_[t].live) continue;
+    const double unseen = static_cast<double>(stamp - tracks_[t].seen) * 1e-9;
+    const bool seen_last_frame = tracks_[t].seen >= previous_stamp;
+    const double gate = config_.gate_m + (seen_last_frame ? 0.0 : growth(tracks_[t], unseen));
+    gate2[t] = gate * gate;
+  }
   for (;;) {
-    double best = gate2;
+    double best = std::numeric_limits<double>::infinity();
     std::size_t best_i = kept_, best_t = kMaxTracks;
     for (std::size_t i = 0; i < kept_; ++i) {
       const Cluster& cl = clusters_[order_[i]];
@@ -395,7 +465,7 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
       for (std::size_t t = 0; t < kMaxTracks; ++t) {
         if (!tracks_[t].live || taken[t]) continue;
         const double d2 = (cl.centroid - predicted[t]).squaredNorm();
-        if (d2 <= best) {
+        if (d2 <= gate2[t] && d2 <= best) {
           best = d2;
           best_i = i;
           best_t = t;
@@ -409,35 +479,175 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
     cl.track = static_cast<int>(best_t);
     const double dt = static_cast<double>(stamp - tr.seen) * 1e-9;
     const Vec2 velocity_before = tr.velocity;
-    filterCentroid(tr, cl.centroid, dt);
+    filterCentroid(tr, cl.centroid, dt, cl.truncated ? config_.truncated_noise_m : config_.centroid_noise_m);
     filterTurnRate(tr, velocity_before, dt);
     tr.seen = stamp;
     tr.missed = 0;
+    ++tr.hits;
   }
 
-  // Tracks not seen this frame age; new clusters start tracks at rest.
-  for (std::size_t t = 0; t < kMaxTracks; ++t) {
-    if (!tracks_[t].live || taken[t]) continue;
-    if (++tracks_[t].missed > config_.max_missed_frames) tracks_[t] = Track{};
-  }
+  // New clusters start tracks at rest; every seen track keeps its outline.
   for (std::size_t i = 0; i < kept_; ++i) {
     Cluster& cl = clusters_[order_[i]];
-    if (cl.track >= 0) {
-      out.obstacles[i].velocity = tracks_[static_cast<std::size_t>(cl.track)].velocity;
-      out.obstacles[i].turn_rate = tracks_[static_cast<std::size_t>(cl.track)].turn_rate;
+    hal::ObstacleFrame::Obstacle& o = out.obstacles[i];
+    if (cl.track < 0) {
+      for (std::size_t t = 0; t < kMaxTracks; ++t) {
+        if (tracks_[t].live) continue;
+        // At rest, its position known to the centroid's noise, its velocity to about half the
+        // largest speed.
+        const double r = cl.truncated ? config_.truncated_noise_m : config_.centroid_noise_m;
+        const double v = 0.5 * config_.max_speed_mps;
+        tracks_[t] = Track{true, cl.centroid, Vec2::Zero(), r * r, 0.0, v * v, stamp, 0, 0.0, 1};
+        cl.track = static_cast<int>(t);
+        break;
+      }
+    }
+    o.unseen_s = 0.0;
+    if (cl.track < 0) {  // every track taken: reported, not tracked
+      o.velocity = Vec2::Zero();
+      o.turn_rate = 0.0;
       continue;
     }
-    for (std::size_t t = 0; t < kMaxTracks; ++t) {
-      if (tracks_[t].live) continue;
-      // At rest, its position known to the centroid's noise, its velocity to about half the
-      // largest speed.
-      const double r = config_.centroid_noise_m, v = 0.5 * config_.max_speed_mps;
-      tracks_[t] = Track{true, cl.centroid, Vec2::Zero(), r * r, 0.0, v * v, stamp, 0};
-      cl.track = static_cast<int>(t);
-      break;
+    Track& tr = tracks_[static_cast<std::size_t>(cl.track)];
+    o.velocity = tr.velocity;
+    o.turn_rate = tr.turn_rate;
+    tr.outline_n = std::min(o.n, tr.outline.size());
+    for (std::size_t v = 0; v < tr.outline_n; ++v) tr.outline[v] = o.vertices[v] - tr.centroid;
+    if (config_.uncertainty_horizon_s > 0.0) {
+      const double r = std::min(config_.max_growth_m, std::sqrt(std::max(0.0, tr.p11)) * config_.uncertainty_horizon_s);
+      growOutline(std::span<Vec2>(o.vertices.data(), o.n), clearOfSelf(std::span<const Vec2>(o.vertices.data(), o.n), r));
     }
-    out.obstacles[i].velocity = Vec2::Zero();
-    out.obstacles[i].turn_rate = 0.0;
+  }
+}
+
+double DepthObstacleDetector::clearOfSelf(std::span<const Vec2> outline, double r) const {
+  if (!(config_.self_clearance_m > 0.0) || outline.size() < 3) return r;
+  const PolygonView poly(outline.data(), outline.size());
+  const double away = locatePoint(robot_, poly) == Containment::kOutside ? distanceToEdges(robot_, poly) : 0.0;
+  return std::max(0.0, std::min(r, away - config_.self_clearance_m));
+}
+
+double DepthObstacleDetector::growth(const Track& track, double t) const {
+  const double sigma_v = std::sqrt(std::max(0.0, track.p11));
+  return std::min(config_.max_growth_m, sigma_v * t + 0.5 * config_.acceleration_mps2 * t * t);
+}
+
+bool DepthObstacleDetector::inView(const hal::DepthFrame& frame, const Pose2& robot, const Vec2& p) const {
+  // Margins: a place this near an end of the range or an edge of the image may be seen or not.
+  constexpr double kRangeMargin = 0.3;  // m
+  constexpr double kEdgePixels = 8.0;
+  const hal::CameraIntrinsics& k = camera_.intrinsics();
+  const double c = std::cos(robot.theta), s = std::sin(robot.theta);
+  const Vec2 d = p - robot.position();
+  const Vec3 base(c * d.x() + s * d.y(), -s * d.x() + c * d.y(), 0.0);
+  const double horizontal = (base.head<2>() - frame_camera_.head<2>()).norm();
+  if (horizontal > config_.max_range_m - kRangeMargin) return false;
+  const int stride = config_.pixel_stride;
+  // Two heights of a body standing there (people, robots, furniture reach 0.8 m): seen when
+  // either is in the image and nothing nearer is in front of it.
+  for (const double h : {0.3, 0.8}) {
+    const double z = std::clamp(h, config_.min_height_m, config_.max_height_m);
+    const Vec3 body = frame_rotation_.transpose() * (Vec3(base.x(), base.y(), z) - frame_camera_);
+    const double depth = body.x();
+    if (!(depth > config_.min_depth_m + kRangeMargin)) continue;
+    const double u = k.cx - k.fx * body.y() / depth;
+    const double v = k.cy - k.fy * body.z() / depth;
+    if (!(u >= kEdgePixels && u < hal::DepthFrame::kWidth - kEdgePixels && v >= kEdgePixels &&
+          v < hal::DepthFrame::kHeight - kEdgePixels)) {
+      continue;
+    }
+    // The nearest pixel perception samples (stride / 2 + i * stride).
+    const auto sampled = [stride](double x, int size) {
+      const int i = static_cast<int>(std::lround((x - stride / 2) / stride));
+      return std::clamp(stride / 2 + i * stride, 0, size - 1);
+    };
+    const int su = sampled(u, hal::DepthFrame::kWidth), sv = sampled(v, hal::DepthFrame::kHeight);
+    const std::uint16_t mm = frame.depth_mm[static_cast<std::size_t>(sv) * hal::DepthFrame::kWidth +
+                                            static_cast<std::size_t>(su)];
+    if (mm != 0 && static_cast<double>(mm) * 1e-3 < depth - config_.gate_m) continue;  // hidden
+    return true;
+  }
+  return false;
+}
+
+// Step 5: tracks not seen this frame. In view they are forgotten after max_missed_frames;
+// out of view (confirmed ones) after keep_unseen_s, except a standing one in the camera's
+// near blind zone, which stays while it is there (the robot beside it cannot see it, and has
+// not left it). Until then they are reported at their predicted place, their outline grown
+// with the uncertainty, but never over the robot itself (self_clearance_m from the base
+// centre): an outline predicted into the robot is not there (the robot would have met it)
+// and is forgotten.
+void DepthObstacleDetector::keepUnseenTracks(const hal::DepthFrame& frame, const Pose2& robot,
+                                             hal::ObstacleFrame& out) {
+  constexpr double kNearZoneMargin = 0.3;  // m beyond min_depth_m: about where readings begin
+  const rt::Nanos stamp = frame.stamp;
+  for (Track& tr : tracks_) {
+    if (!tr.live || tr.seen == stamp) continue;
+    const double unseen = static_cast<double>(stamp - tr.seen) * 1e-9;
+    const Vec2 predicted = tr.centroid + tr.velocity * unseen;
+    const bool keep = config_.keep_unseen_s > 0.0 && tr.hits >= config_.confirm_frames;
+    if (keep && !inView(frame, robot, predicted)) {
+      const bool near_standing = tr.velocity.norm() < config_.turn_min_speed_mps &&
+                                 (predicted - camera_map_).norm() < config_.min_depth_m + kNearZoneMargin;
+      if (unseen > config_.keep_unseen_s && !near_standing) {
+        tr = Track{};
+        continue;
+      }
+    } else if (++tr.missed > config_.max_missed_frames) {
+      tr = Track{};
+      continue;
+    }
+    if (tr.outline_n < 3) continue;
+    if (out.count == hal::ObstacleFrame::kMaxObstacles) {
+      ++out.dropped;
+      continue;
+    }
+    hal::ObstacleFrame::Obstacle& o = out.obstacles[out.count];
+    o.n = tr.outline_n;
+    for (std::size_t v = 0; v < o.n; ++v) o.vertices[v] = tr.outline[v] + predicted;
+    double r = growth(tr, unseen);
+    if (config_.self_clearance_m > 0.0) {
+      const PolygonView outline(o.vertices.data(), o.n);
+      const double away = locatePoint(robot.position(), outline) == Containment::kOutside
+                              ? distanceToEdges(robot.position(), outline)
+                              : 0.0;
+      if (away < config_.self_clearance_m) {
+        tr = Track{};
+        continue;
+      }
+      r = std::min(r, away - config_.self_clearance_m);
+    }
+    growOutline(std::span<Vec2>(o.vertices.data(), o.n), r);
+    o.velocity = tr.velocity;
+    o.turn_rate = tr.turn_rate;
+    o.unseen_s = unseen;
+    ++out.count;
+  }
+}
+
+void growOutline(std::span<Vec2> p, double r) {
+  const std::size_t n = p.size();
+  if (!(r > 0.0) || n < 3) return;
+  // Each vertex moves to where its two edges, each moved out by r, meet (the mitre), at most
+  // 4 r out (a corner sharper than about 30 degrees is cut there).
+  std::array<Vec2, hal::ObstacleFrame::kMaxVertices> normal{};
+  const std::size_t m = std::min(n, normal.size());
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vec2 e = p[(i + 1) % m] - p[i];
+    const double len = e.norm();
+    normal[i] = len > 0.0 ? Vec2(Vec2(e.y(), -e.x()) / len) : Vec2(0.0, 0.0);
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vec2 a = normal[(i + m - 1) % m], b = normal[i];
+    const Vec2 sum = a + b;
+    const double denom = 1.0 + a.dot(b);
+    // The mitre is r * |a + b| / (1 + a.b) out: more than 4 r when 1 + a.b < 1/8.
+    Vec2 offset = sum * (r / std::max(denom, 1.0 / 8.0));
+    if (denom < 1.0 / 8.0) {
+      const double len = sum.norm();
+      offset = len > 0.0 ? Vec2(sum * (4.0 * r / len)) : Vec2(a * r);
+    }
+    p[i] += offset;
   }
 }
 

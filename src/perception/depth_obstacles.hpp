@@ -18,7 +18,13 @@
 //                       a constant-velocity Kalman filter on its point centroid gives the
 //                       velocity (the smoothed displacement over the time between frames); a
 //                       new track starts at 0 m/s. The turn rate is the smoothed rate at
-//                       which that velocity's direction turns (0 for slow tracks).
+//                       which that velocity's direction turns (0 for slow tracks);
+//   5. keepUnseenTracks: a track not seen this frame is forgotten after max_missed_frames if
+//                       the camera should have seen it (its place in the image, in range, not
+//                       hidden behind something nearer); out of view it is kept up to
+//                       keep_unseen_s, reported at its predicted place with its outline grown
+//                       by its growing uncertainty, and a cluster within the gate grown as
+//                       much continues it (a person walking out of the view and back).
 //
 // Everything is sized at construction (a workspace object, as OMPL and PX4 keep theirs);
 // process() allocates nothing, throws nothing and takes time linear in the sampled pixels and
@@ -79,6 +85,10 @@ struct DepthObstaclesConfig {
   // centroids. centroid_noise_m: how much a centroid jitters from frame to frame (depth noise,
   // and parts of a surface coming into or going out of view as things move).
   double centroid_noise_m = 0.03;
+  // A cluster at the image's left or right edge is cut off by it: its centroid moves with the
+  // edge as the body enters or leaves the view, not with the body. Its centroid is trusted
+  // this little (m) instead.
+  double truncated_noise_m = 0.3;
   // How quickly an obstacle may change its velocity (m/s^2; people: about 1).
   double acceleration_mps2 = 1.0;
   // Speeds are clamped to this (m/s): faster is an association slip, not a person.
@@ -90,8 +100,30 @@ struct DepthObstaclesConfig {
   double turn_rate_time_s = 0.3;
   double turn_min_speed_mps = 0.3;
   double max_turn_rate_rps = 3.0;
-  // A track unseen for more frames than this is forgotten.
+  // A track the camera should have seen (in view: see keepUnseenTracks) but did not, for more
+  // frames than this, is forgotten.
   int max_missed_frames = 5;
+  // A track out of view (outside the image, nearer than min_depth_m or beyond max_range_m,
+  // or hidden behind something nearer) is kept this long (s) at its predicted place, then
+  // forgotten; 0: out of view is the same as unseen. Only tracks seen in at least
+  // confirm_frames frames are kept (a cluster of noise is not).
+  double keep_unseen_s = 1.5;
+  int confirm_frames = 3;
+  // While unseen a track's outline grows by sigma_v * t + acceleration_mps2 * t^2 / 2 (sigma_v:
+  // its filtered velocity's standard deviation, t: the time unseen), at most max_growth_m,
+  // and so does its gate.
+  double max_growth_m = 1.0;
+  // The camera sees only the near side of a body: each outline is extended this far (m) away
+  // from the camera, for the side it cannot see. 0: the visible cells only.
+  double hidden_depth_m = 0.0;
+  // A track's velocity is uncertain (a new one's most): its outline is grown by the distance
+  // that uncertainty (the filter's standard deviation) covers in this time (s), at most
+  // max_growth_m. 0: not grown.
+  double uncertainty_horizon_s = 0.0;
+  // The robot's own radius about its base centre (the pose process() is given): an unseen
+  // track's outline is grown no nearer than this, and one predicted nearer is forgotten (the
+  // robot would have met it). 0: not checked.
+  double self_clearance_m = 0.0;
   // A gap between frame stamps longer than this (or a stamp going backwards) forgets every
   // track: the velocities would be stale.
   double max_frame_gap_s = 0.5;
@@ -151,12 +183,18 @@ class DepthObstacleDetector {
     std::uint32_t pixel;
     std::uint16_t min_mm, max_mm;
   };
+  // A camera's rays, and which of them sample the image's first or last column.
+  struct Rays {
+    std::vector<Ray> rays;
+    std::vector<std::uint32_t> edge;  // indices into rays
+  };
   struct Cluster {
     std::uint32_t first = 0, last = 0;  // its cells: queue_[first, last)
     std::uint32_t points = 0;
     Vec2 centroid{0.0, 0.0};  // of its points, map frame
     double distance = 0.0;    // centroid to the robot
     int track = -1;
+    bool truncated = false;   // some of its points come from the image's left or right edge
   };
   struct Track {
     bool live = false;
@@ -168,27 +206,39 @@ class DepthObstacleDetector {
     rt::Nanos seen = 0;
     int missed = 0;
     double turn_rate = 0.0;  // rad/s, counter-clockwise positive
+    int hits = 0;            // frames it was seen in
+    // Its outline when last seen, relative to `centroid`.
+    std::array<Vec2, hal::ObstacleFrame::kMaxVertices> outline{};
+    std::size_t outline_n = 0;
   };
 
   // The sampled rays of a camera with this rotation and position (base frame) into `out`,
   // within its capacity (reserved at construction: no allocation).
-  void fillRays(const Eigen::Matrix3d& rotation, const Vec3& position, std::vector<Ray>& out) const;
+  void fillRays(const Eigen::Matrix3d& rotation, const Vec3& position, Rays& out) const;
   void useFrameMount(const hal::CameraMount& mount);
-  void backProject(const hal::DepthFrame& frame, const std::vector<Ray>& rays, const Vec3& camera_position,
-                   const Pose2& robot, DepthObstaclesStats& stats);
+  void backProject(const hal::DepthFrame& frame, const Rays& rays, const Vec3& camera_position, const Pose2& robot,
+                   DepthObstaclesStats& stats);
   void findClusters(const Pose2& robot, DepthObstaclesStats& stats);
   void outlineClusters(hal::ObstacleFrame& out);
   void trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out);
+  void keepUnseenTracks(const hal::DepthFrame& frame, const Pose2& robot, hal::ObstacleFrame& out);
+  // Whether the camera of this frame should have seen something at `p` (map frame): its place
+  // in the image, in range, and nothing nearer in front of it.
+  bool inView(const hal::DepthFrame& frame, const Pose2& robot, const Vec2& p) const;
+  // How far a track unseen for t seconds may be from its prediction.
+  double growth(const Track& track, double t) const;
+  // r, or less so that the outline grown by it stays self_clearance_m from the base centre.
+  double clearOfSelf(std::span<const Vec2> outline, double r) const;
   std::size_t outline(const Cluster& cluster, std::span<Vec2> out);
-  void filterCentroid(Track& track, const Vec2& measured, double dt) const;
+  void filterCentroid(Track& track, const Vec2& measured, double dt, double noise_m) const;
   void filterTurnRate(Track& track, const Vec2& velocity_before, double dt) const;
 
   DepthObstaclesConfig config_;
   CameraModel camera_;
   StaticMapMask mask_;
-  std::vector<Ray> rays_;
+  Rays rays_;
   // The rays of the last frame's own mount (frame.has_mount), and that mount.
-  std::vector<Ray> frame_rays_;
+  Rays frame_rays_;
   hal::CameraMount frame_mount_;
   Vec3 frame_position_{0.0, 0.0, 0.0};
   bool frame_rays_built_ = false;
@@ -197,12 +247,20 @@ class DepthObstacleDetector {
   std::int64_t gi0_ = 0, gj0_ = 0;  // the grid's lower-left cell on the map lattice (this frame)
   Vec2 origin_{0.0, 0.0};           // its corner in the map frame
   std::vector<std::uint16_t> count_;
+  std::vector<std::uint8_t> edge_;    // per cell: a point from the image's left or right edge
+  std::vector<std::uint32_t> edge_cells_;  // the cells edge_ marks (cleared next frame)
   std::vector<float> sum_x_, sum_y_;  // point coordinates relative to origin_
   std::vector<std::int32_t> label_;   // -1: no obstacle; 0: unvisited; > 0: cluster id
   std::vector<std::uint32_t> queue_;  // flood fill queue, also the clusters' cell lists
   std::vector<std::int32_t> row_min_, row_max_;
   std::vector<std::int32_t> rows_;
-  std::vector<Vec2> corners_, hull_;
+  std::vector<Vec2> corners_, hull_, extended_;
+  // This frame's camera: its rotation (base <- body) and position (base frame), and its
+  // position in the map frame.
+  Eigen::Matrix3d frame_rotation_ = Eigen::Matrix3d::Identity();
+  Vec3 frame_camera_{0.0, 0.0, 0.0};
+  Vec2 camera_map_{0.0, 0.0};
+  Vec2 robot_{0.0, 0.0};  // this frame's base centre (map frame)
   std::array<Cluster, kMaxClusters> clusters_{};
   std::size_t cluster_count_ = 0;
   std::array<std::uint16_t, kMaxClusters> order_{};
@@ -210,6 +268,10 @@ class DepthObstacleDetector {
   std::array<Track, kMaxTracks> tracks_{};
   rt::Nanos last_stamp_ = -1;
 };
+
+// Grows a convex counter-clockwise polygon outwards by r (in place, the same vertices): each
+// vertex goes to where its two edges moved out by r meet, at most 4 r out. No allocation.
+void growOutline(std::span<Vec2> polygon, double r);
 
 // Grows a convex counter-clockwise polygon of n vertices (in place) to at most max_n >= 4
 // vertices that contain it: repeatedly the edge whose neighbours, extended to meet, add the

@@ -33,6 +33,53 @@ MotionLimits readLimits(const io::ConfigValue& node) {
   return lim;
 }
 
+// An optional number: the default when absent.
+double optionalNumber(const io::ConfigValue& node, std::string_view key, double fallback, const io::Range& range) {
+  const io::ConfigValue v = node.get(key);
+  return v.present() ? v.number(range) : fallback;
+}
+
+DepthCameraProfile readCamera(const io::ConfigValue& node) {
+  node.mapping({"mount", "fov_deg", "range_m", "rate_hz", "noise_mm_per_m2", "dropout", "grazing_deg", "frame_loss",
+                "latency_s", "head"});
+  DepthCameraProfile c;
+  const io::ConfigValue m = node.required("mount", "{x, y, z, roll, pitch, yaw}: the camera on the base");
+  m.mapping({"x", "y", "z", "roll", "pitch", "yaw"});
+  const io::Range angle = io::Range::closed(-kPi, kPi, "rad");
+  const io::Range offset = io::Range::closed(-DepthCameraProfile::kMaxMountOffsetM, DepthCameraProfile::kMaxMountOffsetM,
+                                             "m", "on the base");
+  c.x = optionalNumber(m, "x", 0.0, offset);
+  c.y = optionalNumber(m, "y", 0.0, offset);
+  c.z = m.required("z", "the camera's height above the floor").number(io::Range::above(0.0, "m", "above the floor"));
+  c.roll = optionalNumber(m, "roll", 0.0, angle);
+  c.pitch = optionalNumber(m, "pitch", 0.0, angle);
+  c.yaw = optionalNumber(m, "yaw", 0.0, angle);
+  const io::ConfigValue fov = node.required("fov_deg", "[horizontal, vertical] degrees");
+  fov.numbers<2>("[horizontal, vertical] degrees");
+  c.fov_h_deg = fov[0].number(io::Range::rightOpen(1.0, 170.0, "degrees"));
+  c.fov_v_deg = fov[1].number(io::Range::rightOpen(1.0, 170.0, "degrees"));
+  const io::ConfigValue range = node.required("range_m", "[min, max] depth in metres");
+  range.numbers<2>("[min, max] depth in metres");
+  c.min_range_m = range[0].number(io::Range::atLeast(0.0, "m"));
+  c.max_range_m = range[1].number(io::Range::leftOpen(c.min_range_m, 65.535, "m", "above min, a depth image holds up to 65.535 m"));
+  c.rate_hz = optionalNumber(node, "rate_hz", c.rate_hz, io::Range::leftOpen(0.0, 1000.0, "Hz"));
+  c.noise_mm_per_m2 = optionalNumber(node, "noise_mm_per_m2", c.noise_mm_per_m2, io::Range::atLeast(0.0));
+  c.dropout = optionalNumber(node, "dropout", c.dropout, io::Range::rightOpen(0.0, 1.0, {}, "a fraction of the pixels"));
+  c.grazing_deg = optionalNumber(node, "grazing_deg", c.grazing_deg, io::Range::leftOpen(0.0, 90.0, "degrees"));
+  c.frame_loss = optionalNumber(node, "frame_loss", c.frame_loss, io::Range::rightOpen(0.0, 1.0, {}, "a fraction of the frames"));
+  c.latency_s = optionalNumber(node, "latency_s", c.latency_s,
+                               io::Range::closed(0.0, std::min(1.0, DepthCameraProfile::kMaxLatencyFrames / c.rate_hz), "s",
+                                                 "at most 1 s and 7 frames at rate_hz"));
+  const io::ConfigValue head = node.section("head", {"pan_max", "pan_rate", "look_ahead_m", "scan"});
+  if (head.present()) {
+    c.pan_max = head.required("pan_max", "how far the head pans each way, rad").number(io::Range::closed(0.0, kPi, "rad"));
+    c.pan_rate = optionalNumber(head, "pan_rate", c.pan_rate, io::Range::above(0.0, "rad/s"));
+    c.look_ahead_m = optionalNumber(head, "look_ahead_m", c.look_ahead_m, io::Range::above(0.0, "m"));
+    c.scan = optionalNumber(head, "scan", c.scan, io::Range::closed(0.0, kPi, "rad"));
+  }
+  return c;
+}
+
 }  // namespace
 
 double RobotProfile::circumradius() const {
@@ -47,12 +94,18 @@ double RobotProfile::inscribedRadius() const { return distanceToEdges(Vec2::Zero
 RobotProfile parseRobotProfile(const std::string& yaml_text, const std::string& source) {
   return io::readAs<ProfileError>(source, [&] {
     const io::ConfigDocument doc = io::ConfigDocument::parse(yaml_text, source);
-    const io::ConfigValue& root = doc.root(kFormat, {"format", "name", "footprint", "limits"});
+    const io::ConfigValue& root = doc.root(kFormat, {"format", "name", "footprint", "limits", "height", "camera"});
     RobotProfile profile;
     const io::ConfigValue name = root.get("name");
     profile.name = name.present() ? name.string("a string") : std::filesystem::path(source).stem().string();
     profile.footprint = readFootprint(root.required("footprint", "a list of [x, y] vertices in the robot frame"));
     profile.limits = readLimits(root.required("limits", "{v_max, v_min, w_max, a_max, b_max}"));
+    profile.height_m = optionalNumber(root, "height", profile.height_m, io::Range::above(0.0, "m"));
+    const io::ConfigValue camera = root.get("camera");
+    if (camera.present()) {
+      profile.camera = readCamera(camera);
+      profile.has_camera = true;
+    }
     return profile;
   });
 }
@@ -62,6 +115,29 @@ RobotProfile loadRobotProfile(const std::filesystem::path& path) {
   return io::readAs<ProfileError>(source, [&] { return parseRobotProfile(io::ConfigDocument::readFile(path, "robot profile"), source); });
 }
 
+DepthCameraProfile paperAgentCamera() {
+  DepthCameraProfile c;
+  c.x = 0.0;
+  c.y = 0.0;
+  c.z = 1.0;
+  c.pitch = 0.3;
+  c.fov_h_deg = 58.0;
+  c.fov_v_deg = 45.0;
+  c.min_range_m = 0.5;
+  c.max_range_m = 4.5;
+  c.rate_hz = 30.0;
+  c.noise_mm_per_m2 = 1.5;
+  c.dropout = 0.02;
+  c.grazing_deg = 80.0;
+  c.frame_loss = 0.01;
+  c.latency_s = 1.0 / 30.0;
+  c.pan_max = 2.8;
+  c.pan_rate = 2.0;
+  c.look_ahead_m = 1.5;
+  c.scan = 0.6;
+  return c;
+}
+
 RobotProfile paperAgentProfile() {
   RobotProfile p;
   p.name = "paper-agent";
@@ -69,6 +145,11 @@ RobotProfile paperAgentProfile() {
   p.footprint = {{0.4, 0.2}, {0.4, -0.2}, {-0.4, -0.25}, {-0.4, 0.25}};
   std::reverse(p.footprint.begin(), p.footprint.end());
   p.limits = MotionLimits{2.0, -1.0, 3.0, 2.0, 6.0};
+  // Not in the paper: the body and camera config/robots/paper-agent.yaml gives it for
+  // staa-sim --obstacles depth.
+  p.height_m = 1.0;
+  p.has_camera = true;
+  p.camera = paperAgentCamera();
   return p;
 }
 

@@ -33,6 +33,8 @@ const SimDepthConfig& validated(const SimDepthConfig& c) {
   if (!(c.noise_mm_per_m2 >= 0.0) || !std::isfinite(c.noise_mm_per_m2)) {
     bad("noise_mm_per_m2", c.noise_mm_per_m2, "finite and >= 0");
   }
+  if (!(c.dropout >= 0.0 && c.dropout < 1.0)) bad("dropout", c.dropout, "in [0, 1) (a fraction of the pixels)");
+  if (!(c.grazing_deg > 0.0 && c.grazing_deg <= 90.0)) bad("grazing_deg", c.grazing_deg, "in (0, 90] degrees");
   if (c.pixel_stride < 1 || c.pixel_stride > 16) bad("pixel_stride", c.pixel_stride, "in 1..16");
   if (!positive(c.rate_hz)) bad("rate_hz", c.rate_hz, "finite and > 0 (Hz)");
   return c;
@@ -74,7 +76,8 @@ DepthRenderer::DepthRenderer(const PolygonMap& map, const SimDepthConfig& config
       const Vec3 r = camera_.ray(u, v);
       const double horizontal = std::hypot(r.x(), r.y());
       rays_[k] = PixelRay{static_cast<float>(r.x()), static_cast<float>(r.y()), static_cast<float>(r.z()),
-                          horizontal > 1e-9 ? static_cast<float>(1.0 / horizontal) : 0.0F, 0};
+                          horizontal > 1e-9 ? static_cast<float>(1.0 / horizontal) : 0.0F,
+                          static_cast<float>(1.0 / r.norm()), 0};
       if (horizontal <= 1e-9) continue;
       azimuth[k] = wrapAngle(std::atan2(r.y(), r.x()) - yaw0_);
       lo = std::min(lo, azimuth[k]);
@@ -101,6 +104,7 @@ DepthRenderer::DepthRenderer(const PolygonMap& map, const SimDepthConfig& config
   edges_.reserve(static_points_.size() + kMaxMoverEdges);
   prisms_.reserve(static_polygons_.size() + kMaxMoverEdges / 3);
   low_prisms_.reserve(prisms_.capacity());
+  prism_mover_.reserve(prisms_.capacity());
   bin_items_.resize(8 * edges_.capacity() + 16 * kBins);
 }
 
@@ -158,6 +162,9 @@ void DepthRenderer::addPrism(std::span<const Vec2> points_map, double height, bo
     edge.p = a;
     edge.e = b - a;
     edge.height = height;
+    const double length = edge.e.norm();
+    edge.inv_length = length > 0.0 ? 1.0 / length : 0.0;
+    edge.prism = static_cast<std::uint32_t>(prisms_.size());
     binEdge(edge);
     edges_.push_back(edge);
     prism.box.min = prism.box.min.cwiseMin(a);
@@ -167,7 +174,8 @@ void DepthRenderer::addPrism(std::span<const Vec2> points_map, double height, bo
   prisms_.push_back(prism);
 }
 
-void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers, DepthFrame& out) {
+void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers, DepthFrame& out,
+                           std::span<std::uint32_t> mover_pixels) {
   const double c = std::cos(robot.theta), s = std::sin(robot.theta);
   const Vec2 camera = robot.transform(camera_.position().head<2>());
   const double cz = camera_.position().z();
@@ -177,16 +185,19 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
   edges_.clear();
   prisms_.clear();
   low_prisms_.clear();
+  prism_mover_.clear();
   for (const StaticPolygon& sp : static_polygons_) {
     const double dx = std::max({sp.box.min.x() - camera.x(), 0.0, camera.x() - sp.box.max.x()});
     const double dy = std::max({sp.box.min.y() - camera.y(), 0.0, camera.y() - sp.box.max.y()});
     // The bounds are seen from inside: near whenever the camera is within range of a side.
     const bool near = sp.solid ? dx * dx + dy * dy <= range * range : true;
     if (!near) continue;
+    prism_mover_.push_back(kNoMover);
     addPrism(std::span<const Vec2>(static_points_.data() + sp.first, sp.count), config_.wall_height_m, sp.solid,
              camera, c, s);
   }
-  for (const PrismView& m : movers) {
+  for (std::size_t i = 0; i < movers.size(); ++i) {
+    const PrismView& m = movers[i];
     if (m.shape.size() < 3 || edges_.size() + m.shape.size() > edges_.capacity() ||
         prisms_.size() == prisms_.capacity()) {
       continue;  // beyond the fixed capacity: unseen
@@ -194,8 +205,11 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
     if (m.shape.size() > kMaxMoverVertices) continue;
     std::array<Vec2, kMaxMoverVertices> placed{};
     for (std::size_t k = 0; k < m.shape.size(); ++k) placed[k] = m.shape[k] + m.position;
+    prism_mover_.push_back(static_cast<std::uint32_t>(i));
     addPrism(std::span<const Vec2>(placed.data(), m.shape.size()), m.height_m, true, camera, c, s);
   }
+  const bool count_movers = !mover_pixels.empty() && mover_pixels.size() == movers.size();
+  if (count_movers) std::fill(mover_pixels.begin(), mover_pixels.end(), 0u);
 
   // Azimuth bins: counts, prefix sums, then the items.
   std::array<std::uint32_t, kBins> cursor{};
@@ -231,6 +245,9 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
   const int stride = config_.pixel_stride;
   if (stride > 1) std::fill(out.depth_mm.begin(), out.depth_mm.end(), std::uint16_t{0});
   const double noise = config_.noise_mm_per_m2 * 1e-3;
+  const double dropout = config_.dropout;
+  // A reading needs the surface within grazing_deg of facing the ray: cos(incidence) >= this.
+  const double min_cos = config_.grazing_deg < 90.0 ? std::cos(config_.grazing_deg * kPi / 180.0) : -1.0;
   for (int v = stride / 2; v < DepthFrame::kHeight; v += stride) {
     for (int u = stride / 2; u < DepthFrame::kWidth; u += stride) {
       const std::size_t k = static_cast<std::size_t>(v) * DepthFrame::kWidth + static_cast<std::size_t>(u);
@@ -238,9 +255,12 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
       const double rx = ray.x, ry = ray.y, rz = ray.z;
       double best = range;  // depth (optical z): the point is depth * (rx, ry, rz) from the camera
       bool hit = false;
+      std::uint32_t hit_prism = kNoMover;  // the prism whose side or top was hit (none: the floor)
+      double hit_cos = 1.0;                // cos(incidence) times |ray|: the surface's normal . ray
       if (config_.floor && rz < 0.0 && -cz / rz < best) {
         best = -cz / rz;
         hit = true;
+        hit_cos = -rz;
       }
       if (ray.inv_horizontal > 0.0F) {
         const double inv_h = ray.inv_horizontal;
@@ -259,6 +279,8 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
           if (z < 0.0 || z > e.height) continue;
           best = depth;
           hit = true;
+          hit_prism = e.prism;
+          hit_cos = std::abs(den) * e.inv_length;  // |cross(r, e)| / |e|: the ray along the edge's normal
         }
         if (rz < 0.0) {
           for (const std::uint32_t pi : low_prisms_) {
@@ -279,15 +301,21 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
             if (inside) {
               best = depth;
               hit = true;
+              hit_prism = pi;
+              hit_cos = -rz;
             }
           }
         }
       }
       std::uint16_t mm = 0;
-      if (hit && best >= config_.min_depth_m) {
+      if (hit && best >= config_.min_depth_m && hit_cos * ray.inv_norm >= min_cos &&
+          !(dropout > 0.0 && rng_.uniform() < dropout)) {
         double d = best;
         if (noise > 0.0) d += noise * best * best * normalSample(rng_);
         mm = static_cast<std::uint16_t>(std::clamp(std::round(d * 1000.0), 1.0, kMaxDepthMm));
+        if (count_movers && hit_prism != kNoMover && prism_mover_[hit_prism] != kNoMover) {
+          ++mover_pixels[prism_mover_[hit_prism]];
+        }
       }
       out.depth_mm[k] = mm;
     }

@@ -41,7 +41,12 @@ struct SimDepthConfig {
   // Kinect-class sensors: a few mm at 0.5 m to ~4 cm at 5 m (Khoshelham & Oude Elberink
   // 2012), about 1.5 mm/m^2. 0: exact depths (rounded to mm).
   double noise_mm_per_m2 = 0.0;
-  std::uint64_t seed = 1;        // of the noise
+  // Dropouts: this fraction of the pixels gives no reading at random, and so does every
+  // surface seen more than grazing_deg off its normal (the projected pattern does not come
+  // back). 0 and 90: none.
+  double dropout = 0.0;
+  double grazing_deg = 90.0;
+  std::uint64_t seed = 1;        // of the noise and the dropouts
   int pixel_stride = 1;          // render every n-th pixel of every n-th row (others 0)
   double rate_hz = 30.0;         // SimDepthCamera's frame rate
 };
@@ -64,8 +69,10 @@ class DepthRenderer {
   DepthRenderer(const PolygonMap& map, const SimDepthConfig& config);
 
   // The frame seen from a robot at `robot` (map frame) among `movers`. Sets depth_mm only
-  // (the caller stamps it).
-  void render(const Pose2& robot, std::span<const PrismView> movers, DepthFrame& out);
+  // (the caller stamps it). `mover_pixels` (empty, or one per mover): how many rendered
+  // pixels show each mover (a reading whose nearest surface is that mover's).
+  void render(const Pose2& robot, std::span<const PrismView> movers, DepthFrame& out,
+              std::span<std::uint32_t> mover_pixels = {});
 
   const CameraModel& camera() const { return camera_; }
   const SimDepthConfig& config() const { return config_; }
@@ -74,6 +81,7 @@ class DepthRenderer {
   struct PixelRay {  // the pixel's ray in the base frame, optical z = 1
     float x, y, z;
     float inv_horizontal;  // 1 / its horizontal length (0: it can only meet the floor)
+    float inv_norm;        // 1 / its length
     std::uint16_t bin;
   };
   struct Edge {  // camera-relative, base-aligned (the robot's heading removed)
@@ -81,6 +89,8 @@ class DepthRenderer {
     Vec2 e{0.0, 0.0};
     double height = 0.0;
     double near = 0.0;               // its horizontal distance from the camera
+    double inv_length = 0.0;         // 1 / |e| (0 for a degenerate edge)
+    std::uint32_t prism = 0;         // the prism it bounds
     int bins[4] = {-1, -1, -1, -1};  // up to two inclusive bin ranges
   };
   struct Prism {  // a polygon of edges_[first, first + count)
@@ -109,6 +119,8 @@ class DepthRenderer {
   std::vector<Edge> edges_;
   std::vector<Prism> prisms_;
   std::vector<std::uint32_t> low_prisms_;  // lower than the camera: their tops can be seen
+  std::vector<std::uint32_t> prism_mover_;  // per prism: its mover's index, or kNoMover
+  static constexpr std::uint32_t kNoMover = 0xFFFFFFFFu;
   std::array<std::uint32_t, kBins + 1> bin_start_{};
   std::vector<std::uint32_t> bin_items_;
   SplitMix64 rng_;

@@ -1,11 +1,14 @@
 // DepthObstacleDetector::process on arbitrary depth frames (any millimetre values), robot
 // poses and per-frame mounts (NaN and infinities included), in the office map: two frames a
-// control period apart (the second one tracks). The obstacles are finite convex outlines of
-// at most max_vertices with finite velocities no faster than max_speed_mps. No exception.
+// control period apart (the second one tracks); with flag 8 also staa-sim's agents' settings
+// over 8 frames that turn away from what was seen (kept tracks). The obstacles are finite
+// convex outlines of at most max_vertices with finite velocities no faster than
+// max_speed_mps, kept no longer than keep_unseen_s. No exception.
 #include "fuzz_support.hpp"
 #include "map/polygon_map.hpp"
 #include "perception/depth_obstacles.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -23,7 +26,22 @@ void requireSound(const hal::ObstacleFrame& out, const DepthObstaclesConfig& con
     fuzz::require(std::isfinite(o.velocity.x()) && std::isfinite(o.velocity.y()) && std::isfinite(o.turn_rate),
                   "a velocity not finite");
     fuzz::require(o.velocity.norm() <= config.max_speed_mps * (1.0 + 1e-9), "faster than max_speed_mps");
+    fuzz::require(o.unseen_s >= 0.0 && o.unseen_s <= config.keep_unseen_s + 1e-6, "kept longer than keep_unseen_s");
   }
+}
+
+// staa-sim's agents' settings (experiment/agent_camera.cpp, agentPerceptionConfig): tracks
+// kept out of view with growing outlines, new tracks grown by their velocity's uncertainty,
+// the hidden side extended, the robot's own disc kept clear.
+DepthObstaclesConfig agentConfig() {
+  DepthObstaclesConfig c;
+  c.min_depth_m = 0.5;
+  c.max_speed_mps = 2.5;
+  c.acceleration_mps2 = 2.0;
+  c.hidden_depth_m = 0.5;
+  c.self_clearance_m = 0.47;
+  c.uncertainty_horizon_s = 1.0 / 3.0;
+  return c;
 }
 }  // namespace
 
@@ -53,6 +71,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     frame->sequence = static_cast<std::uint64_t>(k);
     detector.process(*frame, robot, out);
     requireSound(out, detector.config());
+  }
+  // Flag 8: staa-sim's settings over more frames: the same depths seen 4 times (tracks are
+  // confirmed), then with the robot turned away (they leave the view and are kept, grown),
+  // then an empty frame.
+  if ((flags & 8) != 0) {
+    static DepthObstacleDetector agent(map, hal::CameraIntrinsics{}, mount, agentConfig());
+    agent.resetTracks();
+    for (int k = 0; k < 8; ++k) {
+      Pose2 at = robot;
+      if (k >= 4) at.theta += 0.8 * (k - 3);
+      if (k == 7) std::fill(frame->depth_mm.begin(), frame->depth_mm.end(), std::uint16_t{0});
+      frame->stamp = 2'000'000'000LL + k * 33'333'333LL;
+      frame->sequence = static_cast<std::uint64_t>(k);
+      agent.process(*frame, at, out);
+      requireSound(out, agent.config());
+    }
   }
   return 0;
 }

@@ -61,6 +61,9 @@ write("depth_perception", "wall-1500", depth_seed(0, [1500] * 64))
 write("depth_perception", "ramp", depth_seed(0, list(range(400, 6000, 50))))
 write("depth_perception", "box-and-holes", depth_seed(0, [0] * 20 + [1800] * 12 + [0] * 8 + [65535]))
 write("depth_perception", "own-mount", depth_seed(7, [2000] * 32, robot=(5.0, 3.0, 1.0), mount=(0.1, 0.0, 1.1, 0.0, 0.4, 0.2)))
+# Flag 8: staa-sim's agents' settings, the robot turning away from what it saw (kept tracks).
+write("depth_perception", "agent-kept", depth_seed(8, [0] * 20 + [1800] * 12 + [0] * 8))
+write("depth_perception", "agent-kept-near", depth_seed(8, [0] * 30 + [700] * 6, robot=(4.5, 4.5, 0.0)))
 
 # ros_depth_image: flags; (camera_info / pose fields by flags); shape; stamps; pixel bytes.
 def image_seed(shape, pixels, flags=0, stamp=1_000_000_000, received=1_010_000_000):

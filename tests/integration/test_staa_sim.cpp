@@ -270,6 +270,9 @@ TEST_F(StaaSim, BadInputExitsTwoNamingTheValue) {
       {{"--map", "map.yaml", "--start", "1,1,0", "--goal", "5,5,0"}, "--goal (5.00, 5.00, 0.00)"},
       {{"--scenario", "typo.yaml"}, "speeed"},
       {{"--scenario", "scenario.yaml", "--map", "map.yaml"}, "--map"},
+      {with(ok_goal, {"--obstacles", "lidar"}), "--obstacles: expected truth or depth, got 'lidar'"},
+      {with(ok_goal, {"--robot", "robot.yaml", "--obstacles", "depth"}),
+       "--obstacles depth: the robot profile 'robot.yaml' has no camera section"},
   };
   for (const BadInput& c : cases) {
     std::string line;
@@ -281,6 +284,38 @@ TEST_F(StaaSim, BadInputExitsTwoNamingTheValue) {
     EXPECT_EQ(r.out, "") << line;
   }
   EXPECT_FALSE(fs::exists(dir_ / "out.json"));
+}
+
+// The paper's agent with a depth camera (config/robots/paper-agent.yaml's).
+std::string cameraProfile() {
+  return std::string(kProfile) + R"(height: 1.0
+camera:
+  mount: {x: 0.0, y: 0.0, z: 1.0, pitch: 0.3}
+  fov_deg: [58, 45]
+  range_m: [0.5, 4.5]
+  head: {pan_max: 2.8, pan_rate: 2.0}
+)";
+}
+
+TEST_F(StaaSim, DepthObstaclesDriveTheScenarioOnWhatTheCameraSees) {
+  writeFile(dir_ / "camera.yaml", cameraProfile());
+  const SimRun r = sim({"--scenario", "scenario.yaml", "--robot", "camera.yaml", "--obstacles", "depth",
+                        "--budget-expansions", "300", "--duration", "20", "--json", "out.json", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json j = json("out.json");
+  EXPECT_EQ(j["obstacles"], "depth");
+  EXPECT_TRUE(j["reached_goal"].get<bool>());
+  EXPECT_EQ(j["collisions"], 0);
+  // A frame every 33 ms until the goal, 1 % of them lost.
+  const double frames = j["camera_frames"].get<double>() + j["camera_frames_lost"].get<double>();
+  EXPECT_NEAR(frames, j["time_to_goal_s"].get<double>() * 30.0, 2.0);
+  EXPECT_GT(j["camera_frames"].get<int>(), 0);
+  // The same run with the truth is recorded as such.
+  const SimRun t = sim({"--scenario", "scenario.yaml", "--budget-expansions", "300", "--duration", "20", "--json",
+                        "truth.json", "--quiet"});
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  EXPECT_EQ(json("truth.json")["obstacles"], "truth");
+  EXPECT_FALSE(json("truth.json").contains("camera_frames"));
 }
 
 // ---- multi-agent runs (--agents N > 1 or --mode ghost) ----
@@ -366,6 +401,21 @@ TEST_F(StaaSim, GhostModeCountsTheObservedAgentOnlyAndPlacesGoalsInAMapWithout) 
   EXPECT_EQ(j["score"].get<int>(), j["goals_reached"].get<int>() - j["collisions"].get<int>());
   EXPECT_EQ(j["planner"]["calls"], 0);  // DWA: no STAA* calls
   EXPECT_THAT(r.out, HasSubstr("observed agent 0"));
+}
+
+TEST_F(StaaSim, DepthObstaclesForEveryAgentReportPerceptionAgainstTheTruth) {
+  writeOffice(dir_);
+  writeFile(dir_ / "camera.yaml", cameraProfile());
+  const SimRun r = sim(with(kOfficeRun, {"--agents", "3", "--robot", "camera.yaml", "--obstacles", "depth", "--json",
+                                         "out.json"}));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json j = json("out.json");
+  expectContractKeys(j);
+  EXPECT_EQ(j["obstacles"], "depth");
+  ASSERT_TRUE(j.contains("perception")) << j.dump();
+  // 3 cameras at 30 Hz for 5 s.
+  EXPECT_EQ(j["perception"]["frames"].get<int>() + j["perception"]["frames_lost"].get<int>(), 450);
+  EXPECT_TRUE(j["perception"]["latency"].contains("p50_s"));
 }
 
 TEST_F(StaaSim, SameSeedGivesTheSameMultiAgentRun) {

@@ -26,7 +26,7 @@ declare -A allowed=(
   [control]="geometry local map path planner robot"
   [world]="geometry hal io map path robot rt"
   [record]="control geometry io local map path planner robot"
-  [experiment]="control geometry map planner record robot viz world"
+  [experiment]="control geometry hal map perception planner record robot viz world"
   [app]="control experiment geometry hal io local map path perception planner record robot rt viz world"
 )
 folder_path() { case "$1" in rt|hal) echo "$1" ;; *) echo "src/$1" ;; esac; }

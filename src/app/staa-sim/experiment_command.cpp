@@ -63,15 +63,15 @@ std::string pad(std::string s, std::size_t width, bool right = false) {
 std::string meanStd(const MeanStd& m) { return fmt(m.mean, 1) + " \u00b1 " + fmt(m.stddev, 1); }
 
 void printSummary(std::ostream& out, const std::vector<ExperimentCell>& cells) {
-  const std::vector<std::size_t> w{12, 12, 7, 11, 13, 5, 14, 14, 14};
+  const std::vector<std::size_t> w{12, 12, 7, 10, 11, 13, 5, 14, 14, 14};
   auto row = [&](const std::vector<std::string>& c) {
     std::string line;
-    for (std::size_t i = 0; i < c.size(); ++i) line += pad(c[i], w[i], i >= 5) + (i + 1 < c.size() ? "  " : "");
+    for (std::size_t i = 0; i < c.size(); ++i) line += pad(c[i], w[i], i >= 6) + (i + 1 < c.size() ? "  " : "");
     out << line << '\n';
   };
-  row({"map", "mode", "agents", "controller", "heuristic", "runs", "goals", "collisions", "score"});
+  row({"map", "mode", "agents", "obstacles", "controller", "heuristic", "runs", "goals", "collisions", "score"});
   for (const ExperimentCell& c : cells) {
-    row({c.map, toString(c.mode), std::to_string(c.agents), toString(c.controller),
+    row({c.map, toString(c.mode), std::to_string(c.agents), toString(c.obstacles), toString(c.controller),
          c.heuristic ? toString(*c.heuristic) : "-", std::to_string(c.runs), meanStd(c.goals), meanStd(c.collisions),
          meanStd(c.score)});
   }
@@ -99,6 +99,11 @@ void addListOptions(CLI::App& app, Args& a) {
       ->default_str(cli::joined(a.maps, [](const std::string& m) { return m; }));
   cli::choice(app.add_option("--controllers", s.controllers, "pd, dwa, staa"), cli::kControllerNames, s.controllers);
   cli::choice(app.add_option("--modes", s.modes, "cooperative, ghost"), cli::kModeNames, s.modes);
+  cli::choice(app.add_option("--obstacles", s.obstacles,
+                             "truth (every other agent's exact polygon and velocity), depth (what each evaluated "
+                             "agent's depth camera sees, through staad's perception; the robot profile's camera), or "
+                             "both side by side"),
+              cli::kObstacleNames, s.obstacles);
   app.add_option("--agents", s.agents, "Agent counts")
       ->delimiter(',')
       ->transform(cli::count("agent counts", 1, 100))
@@ -174,6 +179,7 @@ void validate(Args& a) {
   cli::requireDistinct("--modes", s.modes, [](SimMode m) { return toString(m); });
   cli::requireDistinct("--agents", s.agents, [](int n) { return std::to_string(n); });
   cli::requireDistinct("--heuristics", s.heuristics, [](HeuristicKind h) { return toString(h); });
+  cli::requireDistinct("--obstacles", s.obstacles, [](ObstacleSource o) { return toString(o); });
   cli::checkCycles(a.duration_option, a.rate_option, s.duration_s, s.rate_hz, " per run");
   s.budget = a.budget->spec(s.rate_hz);
   loadMaps(a);
@@ -215,7 +221,9 @@ class ProgressLine {
     std::string line = "[" + std::to_string(p.done) + "/" + std::to_string(p.total) + "] " + clock(p.elapsed_s) +
                        " elapsed, ~" + clock(p.remaining_s) + " left; last: " + r.map + " " + toString(r.controller) +
                        (r.heuristic && spec_.heuristics.size() > 1 ? std::string("/") + toString(*r.heuristic) : "") +
-                       " " + toString(r.mode) + " x" + std::to_string(r.agents) + " run " + std::to_string(r.run) +
+                       " " + toString(r.mode) + " x" + std::to_string(r.agents) +
+                       (spec_.obstacles.size() > 1 ? std::string(" ") + toString(r.obstacles) : "") + " run " +
+                       std::to_string(r.run) +
                        ": score " + std::to_string(r.result.score);
     const std::size_t width = line.size();
     if (width < last_width_) line += std::string(last_width_ - width, ' ');

@@ -146,6 +146,11 @@ Json resultJson(const Request& rq, const staa::SimResult& r) {
   j["duration_s"] = o.duration_s;
   j["budget"] = staa::budgetJson(o.budget);
   j["heuristic"] = staa::toString(rq.heuristic);
+  j["obstacles"] = staa::toString(o.obstacles);
+  if (o.obstacles == staa::ObstacleSource::kDepth) {
+    j["camera_frames"] = r.camera_frames;
+    j["camera_frames_lost"] = r.camera_frames_lost;
+  }
   const Pose2& s = rq.scenario.start;
   const Pose2& g = rq.scenario.goal;
   j["start"] = Json::array({s.x, s.y, s.theta});
@@ -430,6 +435,7 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
   j["duration_s"] = o.duration_s;
   j["budget"] = staa::budgetJson(o.budget);
   j["heuristic"] = staa::toString(rq.heuristic);
+  j["obstacles"] = staa::toString(o.obstacles);
   // The agents start on goal locations and drive to random ones: no single start or goal.
   j["start"] = nullptr;
   j["goal"] = nullptr;
@@ -461,6 +467,7 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
   }
   j["agents"] = std::move(agents);
   j["contacts"] = staa::contactsJson(r.contacts);
+  if (r.perception) j["perception"] = staa::perceptionJson(*r.perception, false);
   return j;
 }
 
@@ -626,6 +633,7 @@ struct Args {
   std::uint64_t seed = 1;
   std::optional<staa::cli::BudgetOptions> budget;
   staa::HeuristicKind heuristic = staa::HeuristicKind::kPathRtr;
+  staa::ObstacleSource obstacles = staa::ObstacleSource::kTruth;
   int svg_every = 15;
   bool quiet = false;
   const CLI::Option* duration_option = nullptr;  // for messages naming the values given
@@ -678,6 +686,10 @@ void addOptions(staa::cli::CommandLine& cl, Args& a) {
   a.budget.emplace(cl, "run");
   cli::choice(app.add_option("--heuristic", a.heuristic, "path-rtr, path-euclid or dijkstra-rtr"),
               cli::kHeuristicNames, a.heuristic);
+  cli::choice(app.add_option("--obstacles", a.obstacles,
+                             "truth (the exact polygons and velocities of the movers or other agents) or depth (what "
+                             "the robot profile's depth camera sees of them, through staad's perception)"),
+              cli::kObstacleNames, a.obstacles);
   app.add_option("--json", a.json_file, "Write the results as JSON to this file");
   app.add_option("--svg", a.svg_dir, "Write frames (frame_NNNNN.svg) into this directory: like the paper's Fig. 1 "
                                      "for one robot, the whole map with every agent for a multi-agent run");
@@ -745,6 +757,7 @@ staa::SimOptions simOptions(const Args& a) {
   o.svg_dir = a.svg_dir;
   o.control.rate_hz = a.rate_hz;
   o.control.staa.heuristic.kind = a.heuristic;
+  o.obstacles = a.obstacles;
   o.record_path = a.record_file;
   if (!a.record_file.empty()) o.record_session = recordSession(a, o.budget);
   return o;
@@ -786,6 +799,13 @@ void loadMapRun(Request& rq, const Args& a) {
   checkGoal(sc, "--goal");
 }
 
+// --obstacles depth renders the frames of the profile's camera: a profile without one is bad input.
+void requireCamera(const Args& a, const staa::RobotProfile& robot) {
+  if (a.obstacles != staa::ObstacleSource::kDepth || robot.has_camera) return;
+  throw InputError("--obstacles depth: the robot profile '" + (a.robot_file.empty() ? robot.name : a.robot_file) +
+                   "' has no camera section (config/robots/paper-agent.yaml shows one)");
+}
+
 Request singleRequest(const Args& a) {
   Request rq;
   rq.controller = a.controller;
@@ -801,6 +821,7 @@ Request singleRequest(const Args& a) {
   } else {
     loadScenarioRun(rq, a);
   }
+  requireCamera(a, rq.scenario.robot);
   return rq;
 }
 
@@ -821,9 +842,11 @@ MultiRequest multiRequest(const Args& a) {
   m.seed = a.seed;
   const staa::SimOptions single = simOptions(a);
   m.control = single.control;
+  m.obstacles = a.obstacles;
   m.record_path = single.record_path;
   m.record_session = single.record_session;
   rq.robot = a.robot_file.empty() ? staa::paperAgentProfile() : staa::loadRobotProfile(a.robot_file);
+  requireCamera(a, rq.robot);
   loadMultiMap(rq, a.map_file);
   return rq;
 }

@@ -17,6 +17,8 @@ inline const std::vector<std::pair<std::string, ControllerKind>> kControllerName
     namesOf({ControllerKind::kStaa, ControllerKind::kDwa, ControllerKind::kPd});
 inline const std::vector<std::pair<std::string, SimMode>> kModeNames =
     namesOf({SimMode::kCooperative, SimMode::kGhost});
+inline const std::vector<std::pair<std::string, ObstacleSource>> kObstacleNames =
+    namesOf({ObstacleSource::kTruth, ObstacleSource::kDepth});
 inline const std::vector<std::pair<std::string, HeuristicKind>> kHeuristicNames =
     namesOf({HeuristicKind::kPathRtr, HeuristicKind::kPathEuclid, HeuristicKind::kDijkstraRtr});
 

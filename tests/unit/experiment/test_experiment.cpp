@@ -4,6 +4,7 @@
 
 #include "map/polygon_map.hpp"
 #include "experiment/experiment.hpp"
+#include "experiment/agent_camera.hpp"
 #include "experiment/experiment_plots.hpp"
 
 #include "read_file.hpp"
@@ -148,6 +149,64 @@ TEST(Experiment, TinyExperimentWritesEveryRunWithTheRequiredKeysAndAFigure) {
   fs::remove_all(dir);
 }
 
+TEST(Experiment, TruthBesideDepthRecordsTheSourceThePerceptionAndDrawsBoth) {
+  const fs::path dir = freshDir("depth");
+  ExperimentSpec spec = tinySpec();
+  spec.controllers = {ControllerKind::kStaa};
+  spec.agents = {2};
+  spec.runs = 1;
+  spec.obstacles = {ObstacleSource::kTruth, ObstacleSource::kDepth};
+  const std::vector<ExperimentRun> runs = runExperiment(spec);
+  ASSERT_EQ(runs.size(), 2U);
+  const Json doc = Json::parse(experimentJson(spec, runs));
+  ASSERT_EQ(doc["runs"].size(), 2U);
+  EXPECT_EQ(doc["runs"][0]["obstacles"], "truth");
+  EXPECT_FALSE(doc["runs"][0].contains("perception"));
+  const Json& depth = doc["runs"][1];
+  EXPECT_EQ(depth["obstacles"], "depth");
+  ASSERT_TRUE(depth.contains("perception")) << depth.dump();
+  const Json& p = depth["perception"];
+  // Two agents with a camera each at 30 Hz for 3 s: 90 frames each, some lost (1 %).
+  EXPECT_EQ(p["frames"].get<int>() + p["frames_lost"].get<int>(), 180);
+  for (const char* key : {"position_error_m", "velocity_error_mps", "kept_position_error_m", "kept_velocity_error_mps"}) {
+    for (const char* stat : {"n", "mean", "p50", "p95", "max", "bins"}) EXPECT_TRUE(p[key].contains(stat)) << key << stat;
+  }
+  for (const char* key : {"near_samples", "near_missed", "near_missed_in_view", "obstacles", "kept_obstacles",
+                          "false_obstacles", "false_kept", "latency", "render_us_mean", "perception_us_mean"}) {
+    EXPECT_TRUE(p.contains(key)) << key;
+  }
+  EXPECT_LE(p["near_missed"].get<int>(), p["near_samples"].get<int>());
+  EXPECT_LE(p["false_obstacles"].get<int>(), p["obstacles"].get<int>());
+  ASSERT_EQ(doc["summary"].size(), 2U);
+  EXPECT_EQ(doc["summary"][1]["obstacles"], "depth");
+  EXPECT_TRUE(doc["summary"][1].contains("perception"));
+  EXPECT_FALSE(doc["summary"][1]["perception"]["position_error_m"].contains("bins"));
+  EXPECT_EQ(doc["spec"]["obstacles"], Json::array({"truth", "depth"}));
+  EXPECT_EQ(doc["spec"]["camera"]["fov_deg"], Json::array({58.0, 45.0}));
+  EXPECT_EQ(doc["spec"]["perception"]["keep_unseen_s"], agentPerceptionConfig(spec.robot).keep_unseen_s);
+
+  writeExperimentPlots(dir, spec, runs);
+  const std::string both = readFile(dir / "obstacles.svg");
+  EXPECT_EQ(attributeValues(both, "bar-score", "height").size(), 2U);
+  EXPECT_THAT(both, HasSubstr("STAA* truth"));
+  EXPECT_THAT(both, HasSubstr("STAA* depth"));
+  // scores.svg shows the first source only.
+  EXPECT_EQ(attributeValues(readFile(dir / "scores.svg"), "bar-score", "height").size(), 1U);
+  fs::remove_all(dir);
+
+  // The same depth run again gives the same results (the cameras' noise is seeded).
+  ExperimentSpec only_depth = spec;
+  only_depth.obstacles = {ObstacleSource::kDepth};
+  const Json again = Json::parse(experimentJson(only_depth, runExperiment(only_depth)));
+  Json a = doc["runs"][1], b = again["runs"][0];
+  for (Json* r : {&a, &b}) {
+    r->erase("planner");
+    (*r)["perception"].erase("render_us_mean");
+    (*r)["perception"].erase("perception_us_mean");
+  }
+  EXPECT_EQ(a, b);
+}
+
 TEST(Experiment, IdenticalResultsWhenRunTwiceOnDifferentThreadCounts) {
   ExperimentSpec spec = tinySpec();
   const Json a = Json::parse(experimentJson(spec, runExperiment(spec)));
@@ -170,7 +229,15 @@ TEST(Experiment, PlanCoversTheMatrixWithStaaOncePerHeuristic) {
   for (const ExperimentRun& r : plan) {
     EXPECT_EQ(r.seed, 7U + static_cast<unsigned>(r.run));
     EXPECT_EQ(r.heuristic.has_value(), r.controller == ControllerKind::kStaa);
+    EXPECT_EQ(r.obstacles, ObstacleSource::kTruth);
   }
+  // Truth beside depth: every cell twice, the same seeds.
+  spec.obstacles = {ObstacleSource::kTruth, ObstacleSource::kDepth};
+  const std::vector<ExperimentRun> both = planExperiment(spec);
+  ASSERT_EQ(both.size(), 2U * plan.size());
+  std::size_t depth = 0;
+  for (const ExperimentRun& r : both) depth += r.obstacles == ObstacleSource::kDepth ? 1 : 0;
+  EXPECT_EQ(depth, plan.size());
 }
 
 ExperimentCell cell(const char* map, ControllerKind c, SimMode mode, int agents, double goals, double collisions,

@@ -106,7 +106,15 @@ TEST(FrameMount, AFrameWithoutAMountIsSeenFromTheFixedMountAsBefore) {
   frame->has_mount = false;
   frame->stamp += 33'333'333;
   detector.process(*frame, test::kCorridorStart, after);
-  expectSameObstacles(after, before);
+  // The obstacles seen in this frame come first and are the fresh detector's; after them the
+  // panned frame's track, not seen now, is still reported (unseen, at its place).
+  ASSERT_EQ(after.count, before.count + 1);
+  hal::ObstacleFrame seen = after;
+  seen.count = before.count;
+  expectSameObstacles(seen, before);
+  const auto& kept = after.obstacles[before.count];
+  EXPECT_GT(kept.unseen_s, 0.0);
+  EXPECT_LT((centroidOf(view(kept)) - centroidOf(view(panned.obstacles[0]))).norm(), 0.05);
 }
 
 }  // namespace

@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <tuple>
+#include <vector>
 #include <string>
 
 namespace staa {
@@ -52,6 +54,97 @@ TEST(RobotProfile, ShippedPaperAgentEqualsPaperAgentProfile) {
   // The nearest edges are the slanted sides, from (0.4, +-0.2) to (-0.4, +-0.25): the origin
   // lies 0.225 / hypot(0.8, 0.05) * 0.8 from each.
   EXPECT_NEAR(loaded.inscribedRadius(), 0.225 * 0.8 / std::hypot(0.8, 0.05), 1e-12);
+  // The body and camera staa-sim --obstacles depth gives it, the same in both.
+  EXPECT_EQ(loaded.height_m, paper.height_m);
+  ASSERT_TRUE(loaded.has_camera);
+  ASSERT_TRUE(paper.has_camera);
+  const DepthCameraProfile& a = loaded.camera;
+  const DepthCameraProfile& b = paper.camera;
+  for (const auto& [name, x, y] : std::vector<std::tuple<const char*, double, double>>{
+           {"x", a.x, b.x}, {"y", a.y, b.y}, {"z", a.z, b.z}, {"roll", a.roll, b.roll}, {"pitch", a.pitch, b.pitch},
+           {"yaw", a.yaw, b.yaw}, {"fov_h", a.fov_h_deg, b.fov_h_deg}, {"fov_v", a.fov_v_deg, b.fov_v_deg},
+           {"min_range", a.min_range_m, b.min_range_m}, {"max_range", a.max_range_m, b.max_range_m},
+           {"rate", a.rate_hz, b.rate_hz}, {"noise", a.noise_mm_per_m2, b.noise_mm_per_m2},
+           {"dropout", a.dropout, b.dropout}, {"grazing", a.grazing_deg, b.grazing_deg},
+           {"frame_loss", a.frame_loss, b.frame_loss}, {"latency", a.latency_s, b.latency_s},
+           {"pan_max", a.pan_max, b.pan_max}, {"pan_rate", a.pan_rate, b.pan_rate},
+           {"look_ahead", a.look_ahead_m, b.look_ahead_m}, {"scan", a.scan, b.scan}}) {
+    EXPECT_EQ(x, y) << name;
+  }
+  // An Xtion: 58 x 45 degrees, 1 m up looking 0.3 rad down, one 30 Hz frame of latency.
+  EXPECT_EQ(a.fov_h_deg, 58.0);
+  EXPECT_EQ(a.fov_v_deg, 45.0);
+  EXPECT_EQ(a.z, 1.0);
+  EXPECT_EQ(a.pitch, 0.3);
+  EXPECT_EQ(a.latency_s, 1.0 / 30.0);
+}
+
+TEST(RobotProfile, ShippedHsrHasItsHeadCamera) {
+  const RobotProfile hsr = loadRobotProfile(test::sourceDir() / "config/robots/hsr.yaml");
+  ASSERT_TRUE(hsr.has_camera);
+  EXPECT_EQ(hsr.camera.z, 1.0);
+  EXPECT_EQ(hsr.camera.pitch, 0.3);
+  EXPECT_EQ(hsr.camera.fov_h_deg, 58.0);
+  EXPECT_GT(hsr.camera.pan_max, 0.0);
+  EXPECT_EQ(hsr.height_m, 1.0);
+}
+
+TEST(RobotProfile, CameraSectionIsOptionalAndItsDefaultsApply) {
+  const RobotProfile none = parseRobotProfile(withLine(kSquare, kLimits), "r.yaml");
+  EXPECT_FALSE(none.has_camera);
+  EXPECT_EQ(none.height_m, 1.0);
+  const RobotProfile some = parseRobotProfile(
+      withLine(kSquare, kLimits) + "height: 1.4\ncamera:\n  mount: {z: 1.2, pitch: 0.4}\n  fov_deg: [60, 49.5]\n"
+                                   "  range_m: [0.6, 5]\n",
+      "r.yaml");
+  EXPECT_EQ(some.height_m, 1.4);
+  ASSERT_TRUE(some.has_camera);
+  EXPECT_EQ(some.camera.z, 1.2);
+  EXPECT_EQ(some.camera.pitch, 0.4);
+  EXPECT_EQ(some.camera.x, 0.0);
+  EXPECT_EQ(some.camera.fov_h_deg, 60.0);
+  EXPECT_EQ(some.camera.fov_v_deg, 49.5);
+  EXPECT_EQ(some.camera.min_range_m, 0.6);
+  EXPECT_EQ(some.camera.max_range_m, 5.0);
+  EXPECT_EQ(some.camera.pan_max, 0.0);  // no head section: a fixed camera
+  const DepthCameraProfile defaults;
+  EXPECT_EQ(some.camera.noise_mm_per_m2, defaults.noise_mm_per_m2);
+  EXPECT_EQ(some.camera.dropout, defaults.dropout);
+  EXPECT_EQ(some.camera.latency_s, defaults.latency_s);
+}
+
+TEST(RobotProfile, EachBadCameraValueNamesItsKeyLineAndValue) {
+  const std::string base = withLine(kSquare, kLimits) + "camera:\n";
+  const std::string fov = "  fov_deg: [58, 45]\n";
+  const std::string range = "  range_m: [0.5, 4.5]\n";
+  const std::string mount = "  mount: {z: 1.0}\n";
+  EXPECT_THAT(errorOf(base + "  mount: {z: 0}\n" + fov + range), HasSubstr("robot.yaml:6: camera.mount.z: must be > 0 m"));
+  EXPECT_THAT(errorOf(base + "  mount: {z: 1, pitch: 17}\n" + fov + range),
+              HasSubstr("camera.mount.pitch: must be in [-3.14159"));
+  EXPECT_THAT(errorOf(base + mount + "  fov_deg: [58]\n" + range), HasSubstr("camera.fov_deg: expected [horizontal, vertical] degrees"));
+  EXPECT_THAT(errorOf(base + mount + "  fov_deg: [180, 45]\n" + range), HasSubstr("camera.fov_deg[0]: must be in [1, 170) degrees, got 180"));
+  EXPECT_THAT(errorOf(base + mount + fov + "  range_m: [2, 1]\n"), HasSubstr("camera.range_m[1]: must be in (2, 65.535] m"));
+  EXPECT_THAT(errorOf(base + mount + fov + range + "  dropout: 1\n"), HasSubstr("camera.dropout: must be in [0, 1)"));
+  EXPECT_THAT(errorOf(base + mount + fov + range + "  grazing_deg: 95\n"), HasSubstr("camera.grazing_deg: must be in (0, 90] degrees, got 95"));
+  EXPECT_THAT(errorOf(base + mount + fov + range + "  head: {pan_rate: 1}\n"), HasSubstr("camera.head.pan_max: missing"));
+  EXPECT_THAT(errorOf(base + mount + fov + range + "  exposure: 3\n"), HasSubstr("camera.exposure: unknown key"));
+  EXPECT_THAT(errorOf(base + fov + range), HasSubstr("camera.mount: missing"));
+  // A mount far off the base would need a perception grid beyond its bound; a latency beyond
+  // the frames staa-sim keeps in flight: both are the profile's errors, not a failed run.
+  EXPECT_THAT(errorOf(base + "  mount: {x: 11, z: 1}\n" + fov + range),
+              HasSubstr("robot.yaml:6: camera.mount.x: must be in [-10, 10] m (on the base), got 11"));
+  EXPECT_EQ(parseRobotProfile(withLine(kSquare, kLimits) + "camera:\n  mount: {y: -10, z: 1}\n" + fov + range, "r.yaml")
+                .camera.y,
+            -10.0);
+  const std::string latency = errorOf(base + mount + fov + range + "  rate_hz: 30\n  latency_s: 0.5\n");
+  EXPECT_THAT(latency, HasSubstr("camera.latency_s: must be in [0, 0.23"));
+  EXPECT_THAT(latency, HasSubstr("7 frames at rate_hz), got 0.5"));
+  EXPECT_EQ(parseRobotProfile(withLine(kSquare, kLimits) + "camera:\n" + mount + fov + range + "  rate_hz: 10\n"
+                                  "  latency_s: 0.7\n",
+                              "r.yaml")
+                .camera.latency_s,
+            0.7);  // 7 frames at 10 Hz
+  EXPECT_THAT(errorOf(withLine(kSquare, kLimits) + "height: -1\n"), HasSubstr("robot.yaml:5: height: must be > 0 m, got -1"));
 }
 
 TEST(RobotProfile, ShippedHsrIsARound16GonOfRadius0215) {

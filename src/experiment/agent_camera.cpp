@@ -1,0 +1,193 @@
+#include "experiment/agent_camera.hpp"
+
+#include "geometry/polygon.hpp"
+#include "robot/unicycle.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+
+namespace staa {
+namespace {
+
+double elapsedUs(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - since).count();
+}
+
+const DepthCameraProfile& cameraOf(const RobotProfile& profile) {
+  if (!profile.has_camera) {
+    throw std::invalid_argument("robot profile '" + profile.name +
+                                "' has no camera section: --obstacles depth needs one (config/robots/paper-agent.yaml "
+                                "shows the keys)");
+  }
+  return profile.camera;
+}
+
+hal::SimDepthConfig rendererConfig(const RobotProfile& profile, const DepthObstaclesConfig& perception,
+                                   std::uint64_t seed) {
+  const DepthCameraProfile& c = cameraOf(profile);
+  hal::SimDepthConfig r;
+  r.intrinsics = cameraIntrinsics(c);
+  r.mount = cameraMount(c);
+  r.wall_height_m = 2.0;  // rooms' walls and furniture reach above every camera's view of them
+  r.mover_height_m = profile.height_m;
+  r.floor = true;
+  r.min_depth_m = c.min_range_m;
+  r.max_depth_m = c.max_range_m;
+  r.noise_mm_per_m2 = c.noise_mm_per_m2;
+  r.dropout = c.dropout;
+  r.grazing_deg = c.grazing_deg;
+  r.seed = seed;
+  // Only the pixels perception reads (every stride-th of every stride-th row from stride / 2).
+  r.pixel_stride = perception.pixel_stride;
+  r.rate_hz = c.rate_hz;
+  return r;
+}
+
+}  // namespace
+
+hal::CameraIntrinsics cameraIntrinsics(const DepthCameraProfile& c) {
+  constexpr double kDeg = kPi / 180.0;
+  hal::CameraIntrinsics k;
+  k.fx = 0.5 * hal::DepthFrame::kWidth / std::tan(0.5 * c.fov_h_deg * kDeg);
+  k.fy = 0.5 * hal::DepthFrame::kHeight / std::tan(0.5 * c.fov_v_deg * kDeg);
+  k.cx = 0.5 * (hal::DepthFrame::kWidth - 1);
+  k.cy = 0.5 * (hal::DepthFrame::kHeight - 1);
+  return k;
+}
+
+hal::CameraMount cameraMount(const DepthCameraProfile& c) {
+  return hal::CameraMount{c.x, c.y, c.z, c.roll, c.pitch, c.yaw};
+}
+
+DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile) {
+  const DepthCameraProfile& c = cameraOf(profile);
+  DepthObstaclesConfig p;
+  p.min_depth_m = c.min_range_m;
+  p.max_range_m = c.max_range_m;
+  p.max_speed_mps = 1.25 * std::max(profile.limits.v_max, -profile.limits.v_min);
+  p.acceleration_mps2 = profile.limits.a_max;
+  // The body's narrower side: seen from any side, at least that much of it is hidden.
+  const Box box = boundingBox(profile.footprint);
+  p.hidden_depth_m = std::min(box.max.x() - box.min.x(), box.max.y() - box.min.y());
+  p.self_clearance_m = profile.circumradius();
+  // A new track's velocity is unknown (0, give or take half the top speed): its outline grows
+  // by what that covers in a third of a second, shrinking as the velocity settles.
+  p.uncertainty_horizon_s = 1.0 / 3.0;
+  return p;
+}
+
+AgentCamera::AgentCamera(const PolygonMap& map, const RobotProfile& profile, const DepthObstaclesConfig& perception,
+                         std::uint64_t seed)
+    : camera_(cameraOf(profile)),
+      renderer_(map, rendererConfig(profile, perception, seed)),
+      detector_(map, cameraIntrinsics(camera_), cameraMount(camera_), perception),
+      image_(std::make_unique<hal::DepthFrame>()),
+      ring_(kRing),
+      ring_time_(kRing, -1.0),
+      period_s_(1.0 / camera_.rate_hz),
+      latency_s_(camera_.latency_s),
+      loss_rng_(seed ^ 0x9E3779B97F4A7C15ULL) {
+  if (latency_s_ > period_s_ * (kRing - 1)) {
+    throw std::invalid_argument("robot profile '" + profile.name + "': camera.latency_s " +
+                                std::to_string(latency_s_) + " is more than " + std::to_string(kRing - 1) +
+                                " frames at camera.rate_hz");
+  }
+}
+
+Pose2 AgentCamera::viewPose(const Pose2& robot) const {
+  if (pan_ == 0.0) return robot;
+  const Vec2 mount(camera_.x, camera_.y);
+  const Vec2 camera = robot.transform(mount);
+  const double heading = wrapAngle(robot.theta + pan_);
+  const double c = std::cos(heading), s = std::sin(heading);
+  return Pose2{camera.x() - (c * mount.x() - s * mount.y()), camera.y() - (s * mount.x() + c * mount.y()), heading};
+}
+
+bool AgentCamera::perceive(double time_s, const Pose2& robot, std::span<const hal::PrismView> others,
+                           std::span<std::uint32_t> mover_pixels) {
+  // A fixed schedule a period apart (a step a little early still counts); no burst after a gap.
+  if (time_s < next_due_s_ - 0.05 * period_s_) return false;
+  next_due_s_ = std::max(next_due_s_ + period_s_, time_s + 0.5 * period_s_);
+  if (camera_.frame_loss > 0.0 && loss_rng_.uniform() < camera_.frame_loss) {
+    ++lost_;
+    return false;
+  }
+  const Pose2 view = viewPose(robot);
+  auto t0 = std::chrono::steady_clock::now();
+  renderer_.render(view, others, *image_, mover_pixels);
+  render_us_ = elapsedUs(t0);
+  image_->stamp = static_cast<rt::Nanos>(std::llround(time_s * 1e9));
+  image_->sequence = ++sequence_;
+  newest_ = taken_ == 0 ? 0 : (newest_ + 1) % kRing;
+  t0 = std::chrono::steady_clock::now();
+  stats_ = detector_.process(*image_, view, ring_[newest_]);
+  perception_us_ = elapsedUs(t0);
+  ring_time_[newest_] = time_s;
+  ++taken_;
+  ++frames_;
+  view_.look(time_s, view.theta + camera_.yaw, 0.5 * camera_.fov_h_deg * kPi / 180.0);
+  return true;
+}
+
+double AgentCamera::limitSpeed(double time_s, const Pose2& robot, double v, double w) const {
+  if (std::abs(v) <= kBlindSpeedMps) return v;
+  const Vec2 ahead = integrateArc(robot, v, w, camera_.look_ahead_m / std::abs(v)).position();
+  const Vec2 d = ahead - robot.transform(Vec2(camera_.x, camera_.y));
+  if (view_.unseenFor(time_s, std::atan2(d.y(), d.x())) <= kViewMemoryS) return v;
+  return std::copysign(kBlindSpeedMps, v);
+}
+
+const hal::ObstacleFrame* AgentCamera::delivered(double time_s) const {
+  if (taken_ == 0) return nullptr;
+  // Newest first: the first whose obstacles have arrived (a small tolerance for rounding).
+  const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(taken_, kRing));
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = (newest_ + kRing - k) % kRing;
+    if (ring_time_[i] + latency_s_ <= time_s + 1e-6) return &ring_[i];
+  }
+  return nullptr;
+}
+
+void AgentCamera::aimHead(const Pose2& robot, double v, double w, std::span<const Vec2> path, double dt) {
+  if (!(camera_.pan_max > 0.0)) return;
+  std::optional<Vec2> aim;
+  if (std::abs(v) >= kSlowMps) {
+    // Where the command's arc is look_ahead_m on (backwards too: the head looks back as far
+    // as it can).
+    const double t = camera_.look_ahead_m / std::abs(v);
+    aim = integrateArc(robot, v, w, t).position();
+  } else if (path.size() >= 2) {
+    // The path's point look_ahead_m along it (its end when shorter).
+    aim = path.back();
+    double left = camera_.look_ahead_m;
+    for (std::size_t k = 1; k < path.size(); ++k) {
+      const double len = (path[k] - path[k - 1]).norm();
+      if (len >= left) {
+        aim = path[k - 1] + (path[k] - path[k - 1]) * (left / len);
+        break;
+      }
+      left -= len;
+    }
+  }
+  double target = 0.0;
+  if (aim) {
+    const Vec2 camera = robot.transform(Vec2(camera_.x, camera_.y));
+    const Vec2 d = *aim - camera;
+    target = d.norm() > 0.05 ? std::clamp(wrapAngle(std::atan2(d.y(), d.x()) - robot.theta - camera_.yaw),
+                                          -camera_.pan_max, camera_.pan_max)
+                             : pan_;
+  }
+  const double step = camera_.pan_rate * dt;
+  if (camera_.scan > 0.0) {
+    // Towards the side of the sweep; at it (or where the limit stops it), the other side.
+    const double side = std::clamp(target + sweep_ * camera_.scan, -camera_.pan_max, camera_.pan_max);
+    if (std::abs(side - pan_) < 0.5 * step) sweep_ = -sweep_;
+    target = std::clamp(target + sweep_ * camera_.scan, -camera_.pan_max, camera_.pan_max);
+  }
+  pan_ += std::clamp(target - pan_, -step, step);
+}
+
+}  // namespace staa
