@@ -79,8 +79,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   staa::rt::Nanos last = -1;
   for (int k = 0; k < 2; ++k) {
     DepthImageView shot = image;
-    shot.stamp_ns += k * 33'000'000;
-    shot.received_ns += k * 33'000'000;
+    // Saturating: the input's stamps may sit at the int64 ends, and the harness's own shift
+    // must not overflow (the adapter itself is what is under test).
+    const auto later = [k](std::int64_t t) {
+      std::int64_t out = 0;
+      return __builtin_add_overflow(t, std::int64_t{k} * 33'000'000, &out) ? t : out;
+    };
+    shot.stamp_ns = later(shot.stamp_ns);
+    shot.received_ns = later(shot.received_ns);
     const std::int64_t arrival = 5'000'000'000 + k * 33'000'000;
     camera.offer(shot, (flags & 8) != 0 ? nullptr : &info, pose, arrival);
     if (camera.read(arrival, *frame)) {
