@@ -380,6 +380,10 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       if (c.other >= 0) {
         c.other_speed = agents[static_cast<std::size_t>(c.other)]->last_speed;
         c.other_tier = agents[static_cast<std::size_t>(c.other)]->last_tier;
+        if (agents[i]->perceives && agents[i]->camera) {
+          c.perceived = true;
+          c.sighting = scorer.sighting(i, static_cast<std::size_t>(c.other), c.time_s);
+        }
       }
       result.contacts.push_back(c);
       if (recording) {

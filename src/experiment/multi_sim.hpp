@@ -96,6 +96,10 @@ struct ContactRecord {
   double other_speed = 0.0;  // |v| of the other agent before the step (0 for the map)
   int tier = -1;
   int other_tier = -1;
+  // kDepth, another agent: what `agent`'s perception knew of `other` (PerceptionScorer::sighting;
+  // why a camera robot met it: never seen, seen too late, or seen and met all the same).
+  bool perceived = false;  // the fields below are filled
+  PerceptionScorer::Sighting sighting;
 };
 
 struct AgentResult {

@@ -135,8 +135,18 @@ void PerceptionScorer::score(const MultiWorld& world, std::size_t self, double t
       }
     }
 
-    // Latency: entering the view, then settling.
     Pair& pair = pairs_[self * n_ + j];
+    if (best < count) {
+      const bool seen = frame.obstacles[best].unseen_s == 0.0;
+      const bool on = pair.sighting_s >= 0.0 && time_s - pair.covered_s <= kSightingGapS;
+      if (seen && !on) {
+        pair.sighting_s = time_s;
+        pair.sighting_m = polygonDistance(own, body);
+      }
+      pair.covered_s = time_s;
+    }
+
+    // Latency: entering the view, then settling.
     const bool in_view = pixels >= kEnterPixels;
     if (pair.entering) {
       if (best < count && frame.obstacles[best].unseen_s == 0.0 &&
@@ -166,6 +176,20 @@ void PerceptionScorer::score(const MultiWorld& world, std::size_t self, double t
     ++accuracy_.false_obstacles;
     accuracy_.false_kept += frame.obstacles[o].unseen_s > 0.0 ? 1 : 0;
   }
+}
+
+PerceptionScorer::Sighting PerceptionScorer::sighting(std::size_t self, std::size_t other, double time_s) const {
+  Sighting out;
+  if (self >= n_ || other >= n_) return out;
+  const Pair& pair = pairs_[self * n_ + other];
+  out.covered = pair.covered_s >= 0.0;
+  out.covered_before_s = out.covered ? time_s - pair.covered_s : 0.0;
+  out.seen = pair.sighting_s >= 0.0 && out.covered && time_s - pair.covered_s <= kSightingGapS;
+  if (out.seen) {
+    out.seen_before_s = time_s - pair.sighting_s;
+    out.seen_at_m = pair.sighting_m;
+  }
+  return out;
 }
 
 }  // namespace staa

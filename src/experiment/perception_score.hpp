@@ -85,11 +85,27 @@ class PerceptionScorer {
 
   const PerceptionAccuracy& accuracy() const { return accuracy_; }
 
+  // A sighting: from the first frame in which observer `self` saw agent `other` (a seen track
+  // covering it) while it was covered at all (seen, or kept out of view) with gaps of at most
+  // kSightingGapS. What the observer's perception knew of `other` at `time_s` (a contact).
+  static constexpr double kSightingGapS = 1.0;
+  struct Sighting {
+    bool seen = false;           // a sighting was on (or ended at most kSightingGapS ago)
+    double seen_before_s = 0.0;  // its first frame, this long before time_s
+    double seen_at_m = 0.0;      // the distance between the two footprints then
+    bool covered = false;        // some frame ever had an obstacle covering `other`
+    double covered_before_s = 0.0;  // the last such frame, this long before time_s
+  };
+  Sighting sighting(std::size_t self, std::size_t other, double time_s) const;
+
  private:
   struct Pair {  // observer i watching agent j
     double last_in_view_s = -1e9;  // the last frame it had kEnterPixels or more in the image
     bool entering = false;         // an entry waits for its velocity to settle
     double entered_s = 0.0;
+    double sighting_s = -1.0;      // the current sighting's first frame (-1: none yet)
+    double sighting_m = 0.0;
+    double covered_s = -1.0;       // the last frame with an obstacle covering it (-1: none)
   };
   std::size_t n_;
   std::vector<Pair> pairs_;  // n x n

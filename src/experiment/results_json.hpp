@@ -48,7 +48,7 @@ inline nlohmann::ordered_json plannerJson(int calls, const Distribution& expansi
   return planner;
 }
 
-// The "contacts" list of a multi-agent run (not in docs/ARCHITECTURE.md section 6 yet): one object
+// The "contacts" list of a multi-agent run (docs/ARCHITECTURE.md, staa-sim JSON): one object
 // per counted contact episode; "other" and the tiers are null for the map and for no plan.
 inline nlohmann::ordered_json contactsJson(const std::vector<ContactRecord>& contacts) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
@@ -62,6 +62,15 @@ inline nlohmann::ordered_json contactsJson(const std::vector<ContactRecord>& con
     j["other_speed"] = c.other_speed;
     j["tier"] = orNull(c.tier);
     j["other_tier"] = orNull(c.other_tier);
+    if (c.perceived) {
+      // What the agent's camera knew of the other (--obstacles depth); null: never in this sighting.
+      const PerceptionScorer::Sighting& s = c.sighting;
+      nlohmann::ordered_json p;
+      p["seen_before_s"] = s.seen ? nlohmann::ordered_json(s.seen_before_s) : nlohmann::ordered_json(nullptr);
+      p["seen_at_m"] = s.seen ? nlohmann::ordered_json(s.seen_at_m) : nlohmann::ordered_json(nullptr);
+      p["covered_before_s"] = s.covered ? nlohmann::ordered_json(s.covered_before_s) : nlohmann::ordered_json(nullptr);
+      j["perceived"] = std::move(p);
+    }
     list.push_back(std::move(j));
   }
   return list;

@@ -1,4 +1,5 @@
 #include "experiment/multi_sim.hpp"
+#include "experiment/results_json.hpp"
 
 #include "robot/robot_profile.hpp"
 #include "geometry/convex.hpp"
@@ -187,6 +188,51 @@ TEST(MultiSim, AContactRecordsWhoTouchedWhatTheirSpeedsAndTheSafetyTier) {
   EXPECT_GE(c.tier, 0);  // STAA* planned
   EXPECT_LE(c.tier, 2);
   EXPECT_EQ(c.other_tier, -1);  // the ghost runs the PD controller
+}
+
+// The corridor above with the observed agent's depth camera: the ghost comes at it from the
+// west, in front of the camera, and is seen at about the camera's range (0.5 to 4.5 m from the
+// head) more than a second before it arrives; the contact says so. Then the observed agent faces
+// the dead end and stays there: the ghost comes from behind, out of the camera's view, and the
+// contact says it was never seen.
+TEST(MultiSim, ADepthContactSaysWhenTheCameraFirstSawTheOther) {
+  const PolygonMap corridor =
+      openMap(14.0, 3.0, {rect(0.0, 0.0, 14.0, 0.7), rect(0.0, 2.3, 14.0, 3.0), rect(7.0, 0.7, 14.0, 2.3)});
+  MultiSimOptions o = scripted(SimMode::kGhost, 6.0, 300, {Pose2{6.0, 1.5, kPi}, Pose2{1.0, 1.5, 0.0}},
+                               {{Vec2(1.0, 1.5)}, {Vec2(6.4, 1.5)}});
+  o.obstacles = ObstacleSource::kDepth;
+  const MultiSimResult r = runMultiAgent(corridor, paperAgentProfile(), o);
+  ASSERT_EQ(r.contacts.size(), 1u);
+  const ContactRecord& c = r.contacts[0];
+  EXPECT_EQ(c.other, 1);
+  ASSERT_TRUE(c.perceived);
+  ASSERT_TRUE(c.sighting.seen);
+  EXPECT_GT(c.sighting.seen_before_s, 0.5);
+  EXPECT_LT(c.sighting.seen_before_s, 3.0);
+  EXPECT_GT(c.sighting.seen_at_m, 2.0);  // footprint to footprint, the camera reaching 4.5 m
+  EXPECT_LT(c.sighting.seen_at_m, 4.5);
+  EXPECT_TRUE(c.sighting.covered);
+  EXPECT_LT(c.sighting.covered_before_s, 0.5);
+  const nlohmann::ordered_json j = contactsJson(r.contacts);
+  EXPECT_DOUBLE_EQ(j[0]["perceived"]["seen_before_s"].get<double>(), c.sighting.seen_before_s);
+
+  MultiSimOptions behind = scripted(SimMode::kGhost, 6.0, 300, {Pose2{6.4, 1.5, 0.0}, Pose2{1.0, 1.5, 0.0}},
+                                    {{Vec2(6.5, 1.5)}, {Vec2(6.4, 1.5)}});
+  behind.obstacles = ObstacleSource::kDepth;
+  const MultiSimResult b = runMultiAgent(corridor, paperAgentProfile(), behind);
+  ASSERT_EQ(b.contacts.size(), 1u);
+  ASSERT_TRUE(b.contacts[0].perceived);
+  EXPECT_FALSE(b.contacts[0].sighting.seen);
+  EXPECT_FALSE(b.contacts[0].sighting.covered);
+  const nlohmann::ordered_json jb = contactsJson(b.contacts);
+  EXPECT_TRUE(jb[0]["perceived"]["seen_before_s"].is_null());
+
+  // With ground truth there is no camera to ask.
+  o.obstacles = ObstacleSource::kTruth;
+  const MultiSimResult t = runMultiAgent(corridor, paperAgentProfile(), o);
+  ASSERT_EQ(t.contacts.size(), 1u);
+  EXPECT_FALSE(t.contacts[0].perceived);
+  EXPECT_FALSE(contactsJson(t.contacts)[0].contains("perceived"));
 }
 
 TEST(MultiWorld, TwoAgentsPlacedTouchingCountOneEpisodeEachAndCanBackAway) {
