@@ -307,6 +307,18 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
   }
 }
 
+void MinimalConstruct::relaxOutsideHeap(std::int32_t from, std::int32_t to) {
+  Node& b = nodes_[static_cast<std::size_t>(to)];
+  const Node& a = nodes_[static_cast<std::size_t>(from)];
+  const double g = a.g + (b.pos - a.pos).norm();
+  if (b.state == kOpen && g >= b.g) return;
+  if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return;
+  b.g = g;
+  b.f = g + (target_pos_ - b.pos).norm();
+  b.parent = from;
+  b.state = kOpen;
+}
+
 void MinimalConstruct::expand(std::int32_t v) {
   // relax(v, w) for every node, with v's data hoisted and the cheap rejections first: most
   // candidates fail a tangency test, so the distance (a square root) is computed for few.
@@ -438,7 +450,6 @@ MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, R
   // test followed by the same walk again when the edge is blocked.
   start_blockers_ = edgeBlockers(target_, use_dynamic);
   if (start_blockers_ > 0) return StartStep::kBlocked;
-  heapRemove(target_);
   t.state = kClosed;
   closed_.push_back(target_);
   ++result.expansions;
@@ -452,7 +463,9 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
   if (!closed_.empty() && closed_.back() == kTarget) closed_.pop_back();
   target_ = addTargetNode(start);
-  for (const std::int32_t c : closed_) relax(c, target_);
+  // The start stays out of the heap until the search needs it there: the test below excludes
+  // it anyway, and the heap pops in a strict order (f, g, id), so where it sat changes no pop.
+  for (const std::int32_t c : closed_) relaxOutsideHeap(c, target_);
   // The common case, without touching the heap: the new start's best connection to the
   // tree is at least as short as anything still open (true keys, computed by a scan) and
   // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
@@ -471,12 +484,19 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
       }
       until_check = 15;
     }
-    heapRemove(target_);
     // The search checked the first start edge again after this test (counted as it did);
-    // later tests stand for the search's own checks.
+    // later tests stand for the search's own checks. (blockedEdgeInto's step, the start kept
+    // out of the heap.)
     if (first) ++edge_checks_;
-    blockedEdgeInto(target_, start_blockers_, use_dynamic);
+    markEdgeBlocked(nodes_[static_cast<std::size_t>(target_)].parent, target_);
+    for (std::size_t i = 0; i < start_blockers_; ++i) discoverPolygon(blockers_[i], use_dynamic);
+    Node& t = nodes_[static_cast<std::size_t>(target_)];
+    t.state = kUnseen;
+    t.parent = kNone;
+    t.g = kInf;
+    for (const std::int32_t c : closed_) relaxOutsideHeap(c, target_);
   }
+  if (nodes_[static_cast<std::size_t>(target_)].state == kOpen) heapPush(target_);
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
   for (const std::int32_t n : heap_) {
     Node& node = nodes_[static_cast<std::size_t>(n)];
@@ -504,10 +524,18 @@ void MinimalConstruct::plantTree(const Vec2& start, const Vec2& goal, bool use_d
 
 std::size_t MinimalConstruct::edgeBlockers(std::int32_t v, bool use_dynamic) {
   const Node& node = nodes_[static_cast<std::size_t>(v)];
-  const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
+  const Node& parent = nodes_[static_cast<std::size_t>(node.parent)];
+  const Vec2& u = parent.pos;
   ++edge_checks_;
-  std::size_t nb =
-      oracle_ != nullptr && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
+  // An edge with an end at a static corner touches that obstacle: the oracle is not asked.
+  const auto static_vertices = static_cast<std::int32_t>(static_.vertexCount());
+  const bool at_static_corner = (node.vertex != kNone && node.vertex < static_vertices) ||
+                                (parent.vertex != kNone && parent.vertex < static_vertices);
+  // Nor after it failed on an edge the exact test found blocked, until the exact test finds
+  // one free: the edges tested one after another are mostly the same way from nearby starts.
+  const bool ask = oracle_ != nullptr && !at_static_corner && !oracle_missed_;
+  std::size_t nb = ask && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
+  if (oracle_ != nullptr && !at_static_corner) oracle_missed_ = nb > 0;
   if (use_dynamic) {
     const std::size_t ns_poly = static_.polygonCount();
     const std::size_t nd = dynamic_.segmentBlockers(u, node.pos, std::span<std::uint32_t>(blockers_).subspan(nb));

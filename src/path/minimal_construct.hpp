@@ -85,7 +85,11 @@ class MinimalConstruct {
 
   // An optional quick test that may declare a segment free of the static obstacles (true
   // only when it certainly is, e.g. from a clearance map); anything else falls back to the
-  // exact test. Plain function pointer and context: no allocation, no virtual call.
+  // exact test. Plain function pointer and context: no allocation, no virtual call. It is
+  // not asked about an edge with an end at a static corner (the edge touches that obstacle,
+  // which no clearance vouches for), nor after the exact test found the last edge it could
+  // have been asked about blocked (until one is found free): it only saves work, the answer
+  // is the exact test's either way.
   using FreeSegmentOracle = bool (*)(const void* context, const Vec2& a, const Vec2& b);
   void setFreeSegmentOracle(FreeSegmentOracle oracle, const void* context) {
     oracle_ = oracle;
@@ -138,6 +142,9 @@ class MinimalConstruct {
   bool markDiscovered(std::uint32_t global_polygon);  // false when it already was
   bool canFollow(std::int32_t from, std::int32_t to) const;
   void relax(std::int32_t from, std::int32_t to);
+  // relax for a node that is not closed and not in the heap (reattachStart's start): its
+  // g, f and parent, no heap operation.
+  void relaxOutsideHeap(std::int32_t from, std::int32_t to);
   void expand(std::int32_t v);
   void repairParent(std::int32_t node);
   // query()'s steps: a kept tree takes the new start (true when the start is found at once,
@@ -177,6 +184,7 @@ class MinimalConstruct {
   Options options_;
   FreeSegmentOracle oracle_ = nullptr;
   const void* oracle_context_ = nullptr;
+  bool oracle_missed_ = false;  // the last edge the oracle was asked about (or skipped) was blocked
   bool staticFree(const Vec2& a, const Vec2& b) const {
     return (oracle_ != nullptr && oracle_(oracle_context_, a, b)) || !static_.segmentBlocked(a, b);
   }
