@@ -52,6 +52,8 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   target_blocked_.clear();
   target_blocked_.reserve(max_nodes);
   heap_.reserve(max_nodes);
+  open_scan_.reserve(max_nodes);
+  open_scan_valid_ = false;
   closed_.reserve(max_nodes);
   path_.reserve(max_nodes + 2);
   blockers_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
@@ -180,6 +182,7 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   std::fill(dynamic_discovered_.begin(), dynamic_discovered_.end(), 0);
   nodes_.clear();
   heap_.clear();
+  open_scan_valid_ = false;
   closed_.clear();
   if (++blocked_generation_ == 0) {
     std::fill(blocked_gen_.begin(), blocked_gen_.end(), 0);
@@ -435,10 +438,18 @@ MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, R
   bool lower = t.g > top - (target_pos_ - key_anchor_).norm();
   if (lower) {
     lower = false;
-    for (const std::int32_t n : heap_) {
-      const Node& o = nodes_[static_cast<std::size_t>(n)];
+    // The open nodes but the start, copied out of the node pool while the heap keeps them
+    // (queries between two pops scan the same ones).
+    if (!open_scan_valid_) {
+      open_scan_.clear();
+      for (const std::int32_t n : heap_) {
+        if (n != target_) open_scan_.push_back(ScanEntry{nodes_[static_cast<std::size_t>(n)].pos, nodes_[static_cast<std::size_t>(n)].g});
+      }
+      open_scan_valid_ = true;
+    }
+    for (const ScanEntry& o : open_scan_) {
       const double slack = t.g - o.g;
-      if (n == target_ || slack <= 0.0) continue;
+      if (slack <= 0.0) continue;
       if ((target_pos_ - o.pos).squaredNorm() < slack * slack) {
         lower = true;
         break;
@@ -694,15 +705,18 @@ void MinimalConstruct::heapDown(std::size_t i) {
 }
 
 void MinimalConstruct::heapPush(std::int32_t n) {
+  if (n != kTarget) open_scan_valid_ = false;
   heap_.push_back(n);
   heapUp(heap_.size() - 1);
 }
 
 void MinimalConstruct::heapDecrease(std::int32_t n) {
+  if (n != kTarget) open_scan_valid_ = false;
   heapUp(static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].heap_pos));
 }
 
 void MinimalConstruct::heapRemove(std::int32_t n) {
+  if (n != kTarget) open_scan_valid_ = false;
   const auto i = static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].heap_pos);
   const std::int32_t last = heap_.back();
   heap_.pop_back();
@@ -716,6 +730,7 @@ void MinimalConstruct::heapRemove(std::int32_t n) {
 
 std::int32_t MinimalConstruct::heapPop() {
   const std::int32_t top = heap_.front();
+  if (top != kTarget) open_scan_valid_ = false;
   heap_.front() = heap_.back();
   heap_.pop_back();
   if (!heap_.empty()) heapDown(0);

@@ -203,6 +203,14 @@ class MinimalConstruct {
   std::vector<Node> nodes_;
   std::vector<std::int32_t> heap_;
   std::vector<std::int32_t> closed_;             // closed node ids in closing order
+  // startIsNextPop's scan: the open nodes but the start (position, g), valid until the heap's
+  // other nodes or their g change.
+  struct ScanEntry {
+    Vec2 pos{0.0, 0.0};
+    double g = 0.0;
+  };
+  std::vector<ScanEntry> open_scan_;
+  bool open_scan_valid_ = false;
   std::vector<std::uint8_t> static_discovered_;  // persists across queries to the same goal
   std::vector<std::uint8_t> dynamic_discovered_;
   std::vector<std::uint32_t> blockers_;
