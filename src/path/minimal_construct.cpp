@@ -52,8 +52,6 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   target_blocked_.clear();
   target_blocked_.reserve(max_nodes);
   heap_.reserve(max_nodes);
-  alive_.reserve(max_nodes);
-  alive_pos_.assign(max_nodes, kNone);
   open_scan_.reserve(max_nodes);
   open_scan_valid_ = false;
   closed_.reserve(max_nodes);
@@ -182,8 +180,6 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   }
   tree_valid_ = false;
   std::fill(dynamic_discovered_.begin(), dynamic_discovered_.end(), 0);
-  for (const std::int32_t n : alive_) alive_pos_[static_cast<std::size_t>(n)] = kNone;
-  alive_.clear();
   nodes_.clear();
   heap_.clear();
   open_scan_valid_ = false;
@@ -195,7 +191,6 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   blocked_count_ = 0;
   total_discovered_ = 0;
   nodes_.push_back(Node{});  // 0: the goal, root of the backward search
-  aliveAdd(0);
   Node target;               // 1: the start, the search's target, replaced by every query
   target.state = kClosed;    // (not a node of the graph until a query places it)
   nodes_.push_back(target);
@@ -274,7 +269,6 @@ void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynam
     node.next = set.vertex(set.nextVertex(v));
     node.vertex = static_cast<std::int32_t>(v + offset);
     nodes_.push_back(node);
-    aliveAdd(static_cast<std::int32_t>(nodes_.size() - 1));
   }
   // Connect the new corners to everything already closed (the repair step).
   for (std::size_t n = first_new; n < nodes_.size(); ++n) {
@@ -328,23 +322,6 @@ void MinimalConstruct::relaxOutsideHeap(std::int32_t from, std::int32_t to) {
   b.state = kOpen;
 }
 
-void MinimalConstruct::aliveAdd(std::int32_t n) {
-  const auto i = static_cast<std::size_t>(n);
-  if (i >= alive_pos_.size()) alive_pos_.resize(i + 1, kNone);  // beyond the sized capacity: not reached
-  alive_pos_[i] = static_cast<std::int32_t>(alive_.size());
-  alive_.push_back(n);
-}
-
-void MinimalConstruct::aliveRemove(std::int32_t n) {
-  const std::int32_t pos = alive_pos_[static_cast<std::size_t>(n)];
-  if (pos == kNone) return;
-  const std::int32_t last = alive_.back();
-  alive_[static_cast<std::size_t>(pos)] = last;
-  alive_pos_[static_cast<std::size_t>(last)] = pos;
-  alive_.pop_back();
-  alive_pos_[static_cast<std::size_t>(n)] = kNone;
-}
-
 void MinimalConstruct::expand(std::int32_t v) {
   // relax(v, w) for every node, with v's data hoisted and the cheap rejections first: most
   // candidates fail a tangency test, so the distance (a square root) is computed for few.
@@ -355,11 +332,10 @@ void MinimalConstruct::expand(std::int32_t v) {
   const Vec2 pu = turn != 0 ? nodes_[static_cast<std::size_t>(a.parent)].pos : pa;
   const double ga = a.g;
   const double bound = orient_bound_;
-  // The nodes not closed, in any order: each one's update depends on v and itself only, and
-  // the heap pops in a strict order (f, g, id) whatever the order of the pushes.
-  for (const std::int32_t id : alive_) {
-    const auto w = static_cast<std::size_t>(id);
+  const std::size_t n = nodes_.size();
+  for (std::size_t w = 0; w < n; ++w) {
     Node& b = nodes_[w];
+    if (b.state == kClosed) continue;
     if (corner) {
       if (!tangentAt(pa, b.pos, prev, next, bound)) continue;
       if (turn != 0) {
@@ -443,7 +419,6 @@ std::int32_t MinimalConstruct::addTargetNode(const Vec2& start) {
   node.pos = start;
   node.g = kInf;
   nodes_[kTarget] = node;
-  if (alive_pos_[kTarget] == kNone) aliveAdd(kTarget);
   target_blocked_.clear();  // blocked edges into the previous start are about another point
   target_pos_ = start;
   return kTarget;
@@ -487,7 +462,6 @@ MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, R
   start_blockers_ = edgeBlockers(target_, use_dynamic);
   if (start_blockers_ > 0) return StartStep::kBlocked;
   t.state = kClosed;
-  aliveRemove(target_);
   closed_.push_back(target_);
   ++result.expansions;
   return StartStep::kFound;
@@ -598,7 +572,6 @@ bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
 void MinimalConstruct::close(std::int32_t v) {
   Node& node = nodes_[static_cast<std::size_t>(v)];
   node.state = kClosed;
-  aliveRemove(v);
   if (node.vertex != kNone && node.parent != kNone) {
     const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
     int side = orientSign(u, node.pos, node.prev, orient_bound_);

@@ -210,12 +210,6 @@ class MinimalConstruct {
     double g = 0.0;
   };
   std::vector<ScanEntry> open_scan_;
-  // The nodes not closed (expand's candidates) and each one's place in that list (kNone:
-  // closed, or not a node of the graph).
-  std::vector<std::int32_t> alive_;
-  std::vector<std::int32_t> alive_pos_;
-  void aliveAdd(std::int32_t n);
-  void aliveRemove(std::int32_t n);
   bool open_scan_valid_ = false;
   std::vector<std::uint8_t> static_discovered_;  // persists across queries to the same goal
   std::vector<std::uint8_t> dynamic_discovered_;
