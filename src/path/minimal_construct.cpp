@@ -292,16 +292,21 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
 
 // Forced inline: repairParent runs it over the whole closed list for every blocked edge,
 // and a call per closed node (registers saved and restored) outweighs the test itself.
-[[gnu::always_inline]] inline void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
+[[gnu::always_inline]] inline bool MinimalConstruct::improve(std::int32_t from, std::int32_t to) {
   Node& b = nodes_[static_cast<std::size_t>(to)];
-  if (b.state == kClosed) return;
   const Node& a = nodes_[static_cast<std::size_t>(from)];
   const double g = a.g + (b.pos - a.pos).norm();
-  if (b.state == kOpen && g >= b.g) return;
-  if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return;
+  if (b.state == kOpen && g >= b.g) return false;
+  if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return false;
   b.g = g;
   b.f = g + (target_pos_ - b.pos).norm();
   b.parent = from;
+  return true;
+}
+
+[[gnu::always_inline]] inline void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
+  Node& b = nodes_[static_cast<std::size_t>(to)];
+  if (b.state == kClosed || !improve(from, to)) return;
   if (b.state == kOpen) {
     heapDecrease(to);
   } else {
@@ -311,15 +316,7 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
 }
 
 void MinimalConstruct::relaxOutsideHeap(std::int32_t from, std::int32_t to) {
-  Node& b = nodes_[static_cast<std::size_t>(to)];
-  const Node& a = nodes_[static_cast<std::size_t>(from)];
-  const double g = a.g + (b.pos - a.pos).norm();
-  if (b.state == kOpen && g >= b.g) return;
-  if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return;
-  b.g = g;
-  b.f = g + (target_pos_ - b.pos).norm();
-  b.parent = from;
-  b.state = kOpen;
+  if (improve(from, to)) nodes_[static_cast<std::size_t>(to)].state = kOpen;
 }
 
 void MinimalConstruct::expand(std::int32_t v) {

@@ -141,6 +141,8 @@ class MinimalConstruct {
   void discoverOne(std::uint32_t global_polygon, bool with_dynamic);
   bool markDiscovered(std::uint32_t global_polygon);  // false when it already was
   bool canFollow(std::int32_t from, std::int32_t to) const;
+  // The way through `from` to `to` if it is shorter and allowed: g, f and parent set (true).
+  bool improve(std::int32_t from, std::int32_t to);
   void relax(std::int32_t from, std::int32_t to);
   // relax for a node that is not closed and not in the heap (reattachStart's start): its
   // g, f and parent, no heap operation.
