@@ -37,6 +37,9 @@ inline int orientSign(const Vec2& a, const Vec2& b, const Vec2& c) {
   // of 0 means both products are 0, so a difference is exactly 0 and so is the determinant.
   const int sign = (det > bound) - (det < -bound);
   if (sign != 0 || bound == 0.0) [[likely]] return sign;
+  // Two equal points (a corner asked about its own neighbour, a segment's end on an edge's
+  // end): the triangle is degenerate, exactly 0 without the exact stage.
+  if (c == b || c == a || a == b) return 0;
   return detail::orientSignExact(a, b, c);
 }
 

@@ -52,6 +52,8 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   target_blocked_.clear();
   target_blocked_.reserve(max_nodes);
   heap_.reserve(max_nodes);
+  open_scan_.reserve(max_nodes);
+  open_scan_valid_ = false;
   closed_.reserve(max_nodes);
   path_.reserve(max_nodes + 2);
   blockers_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
@@ -180,6 +182,7 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   std::fill(dynamic_discovered_.begin(), dynamic_discovered_.end(), 0);
   nodes_.clear();
   heap_.clear();
+  open_scan_valid_ = false;
   closed_.clear();
   if (++blocked_generation_ == 0) {
     std::fill(blocked_gen_.begin(), blocked_gen_.end(), 0);
@@ -289,22 +292,31 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
 
 // Forced inline: repairParent runs it over the whole closed list for every blocked edge,
 // and a call per closed node (registers saved and restored) outweighs the test itself.
-[[gnu::always_inline]] inline void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
+[[gnu::always_inline]] inline bool MinimalConstruct::improve(std::int32_t from, std::int32_t to) {
   Node& b = nodes_[static_cast<std::size_t>(to)];
-  if (b.state == kClosed) return;
   const Node& a = nodes_[static_cast<std::size_t>(from)];
   const double g = a.g + (b.pos - a.pos).norm();
-  if (b.state == kOpen && g >= b.g) return;
-  if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return;
+  if (b.state == kOpen && g >= b.g) return false;
+  if (!canFollow(from, to) || edgeKnownBlocked(from, to)) return false;
   b.g = g;
   b.f = g + (target_pos_ - b.pos).norm();
   b.parent = from;
+  return true;
+}
+
+[[gnu::always_inline]] inline void MinimalConstruct::relax(std::int32_t from, std::int32_t to) {
+  Node& b = nodes_[static_cast<std::size_t>(to)];
+  if (b.state == kClosed || !improve(from, to)) return;
   if (b.state == kOpen) {
     heapDecrease(to);
   } else {
     b.state = kOpen;
     heapPush(to);
   }
+}
+
+void MinimalConstruct::relaxOutsideHeap(std::int32_t from, std::int32_t to) {
+  if (improve(from, to)) nodes_[static_cast<std::size_t>(to)].state = kOpen;
 }
 
 void MinimalConstruct::expand(std::int32_t v) {
@@ -423,10 +435,18 @@ MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, R
   bool lower = t.g > top - (target_pos_ - key_anchor_).norm();
   if (lower) {
     lower = false;
-    for (const std::int32_t n : heap_) {
-      const Node& o = nodes_[static_cast<std::size_t>(n)];
+    // The open nodes but the start, copied out of the node pool while the heap keeps them
+    // (queries between two pops scan the same ones).
+    if (!open_scan_valid_) {
+      open_scan_.clear();
+      for (const std::int32_t n : heap_) {
+        if (n != target_) open_scan_.push_back(ScanEntry{nodes_[static_cast<std::size_t>(n)].pos, nodes_[static_cast<std::size_t>(n)].g});
+      }
+      open_scan_valid_ = true;
+    }
+    for (const ScanEntry& o : open_scan_) {
       const double slack = t.g - o.g;
-      if (n == target_ || slack <= 0.0) continue;
+      if (slack <= 0.0) continue;
       if ((target_pos_ - o.pos).squaredNorm() < slack * slack) {
         lower = true;
         break;
@@ -438,7 +458,6 @@ MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, R
   // test followed by the same walk again when the edge is blocked.
   start_blockers_ = edgeBlockers(target_, use_dynamic);
   if (start_blockers_ > 0) return StartStep::kBlocked;
-  heapRemove(target_);
   t.state = kClosed;
   closed_.push_back(target_);
   ++result.expansions;
@@ -452,7 +471,9 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
   if (!closed_.empty() && closed_.back() == kTarget) closed_.pop_back();
   target_ = addTargetNode(start);
-  for (const std::int32_t c : closed_) relax(c, target_);
+  // The start stays out of the heap until the search needs it there: the test below excludes
+  // it anyway, and the heap pops in a strict order (f, g, id), so where it sat changes no pop.
+  for (const std::int32_t c : closed_) relaxOutsideHeap(c, target_);
   // The common case, without touching the heap: the new start's best connection to the
   // tree is at least as short as anything still open (true keys, computed by a scan) and
   // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
@@ -471,12 +492,19 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
       }
       until_check = 15;
     }
-    heapRemove(target_);
     // The search checked the first start edge again after this test (counted as it did);
-    // later tests stand for the search's own checks.
+    // later tests stand for the search's own checks. (blockedEdgeInto's step, the start kept
+    // out of the heap.)
     if (first) ++edge_checks_;
-    blockedEdgeInto(target_, start_blockers_, use_dynamic);
+    markEdgeBlocked(nodes_[static_cast<std::size_t>(target_)].parent, target_);
+    for (std::size_t i = 0; i < start_blockers_; ++i) discoverPolygon(blockers_[i], use_dynamic);
+    Node& t = nodes_[static_cast<std::size_t>(target_)];
+    t.state = kUnseen;
+    t.parent = kNone;
+    t.g = kInf;
+    for (const std::int32_t c : closed_) relaxOutsideHeap(c, target_);
   }
+  if (nodes_[static_cast<std::size_t>(target_)].state == kOpen) heapPush(target_);
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
   for (const std::int32_t n : heap_) {
     Node& node = nodes_[static_cast<std::size_t>(n)];
@@ -504,10 +532,18 @@ void MinimalConstruct::plantTree(const Vec2& start, const Vec2& goal, bool use_d
 
 std::size_t MinimalConstruct::edgeBlockers(std::int32_t v, bool use_dynamic) {
   const Node& node = nodes_[static_cast<std::size_t>(v)];
-  const Vec2& u = nodes_[static_cast<std::size_t>(node.parent)].pos;
+  const Node& parent = nodes_[static_cast<std::size_t>(node.parent)];
+  const Vec2& u = parent.pos;
   ++edge_checks_;
-  std::size_t nb =
-      oracle_ != nullptr && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
+  // An edge with an end at a static corner touches that obstacle: the oracle is not asked.
+  const auto static_vertices = static_cast<std::int32_t>(static_.vertexCount());
+  const bool at_static_corner = (node.vertex != kNone && node.vertex < static_vertices) ||
+                                (parent.vertex != kNone && parent.vertex < static_vertices);
+  // Nor after it failed on an edge the exact test found blocked, until the exact test finds
+  // one free: the edges tested one after another are mostly the same way from nearby starts.
+  const bool ask = oracle_ != nullptr && !at_static_corner && !oracle_missed_;
+  std::size_t nb = ask && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
+  if (oracle_ != nullptr && !at_static_corner) oracle_missed_ = nb > 0;
   if (use_dynamic) {
     const std::size_t ns_poly = static_.polygonCount();
     const std::size_t nd = dynamic_.segmentBlockers(u, node.pos, std::span<std::uint32_t>(blockers_).subspan(nb));
@@ -666,15 +702,18 @@ void MinimalConstruct::heapDown(std::size_t i) {
 }
 
 void MinimalConstruct::heapPush(std::int32_t n) {
+  if (n != kTarget) open_scan_valid_ = false;
   heap_.push_back(n);
   heapUp(heap_.size() - 1);
 }
 
 void MinimalConstruct::heapDecrease(std::int32_t n) {
+  if (n != kTarget) open_scan_valid_ = false;
   heapUp(static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].heap_pos));
 }
 
 void MinimalConstruct::heapRemove(std::int32_t n) {
+  if (n != kTarget) open_scan_valid_ = false;
   const auto i = static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].heap_pos);
   const std::int32_t last = heap_.back();
   heap_.pop_back();
@@ -688,6 +727,7 @@ void MinimalConstruct::heapRemove(std::int32_t n) {
 
 std::int32_t MinimalConstruct::heapPop() {
   const std::int32_t top = heap_.front();
+  if (top != kTarget) open_scan_valid_ = false;
   heap_.front() = heap_.back();
   heap_.pop_back();
   if (!heap_.empty()) heapDown(0);

@@ -85,7 +85,11 @@ class MinimalConstruct {
 
   // An optional quick test that may declare a segment free of the static obstacles (true
   // only when it certainly is, e.g. from a clearance map); anything else falls back to the
-  // exact test. Plain function pointer and context: no allocation, no virtual call.
+  // exact test. Plain function pointer and context: no allocation, no virtual call. It is
+  // not asked about an edge with an end at a static corner (the edge touches that obstacle,
+  // which no clearance vouches for), nor after the exact test found the last edge it could
+  // have been asked about blocked (until one is found free): it only saves work, the answer
+  // is the exact test's either way.
   using FreeSegmentOracle = bool (*)(const void* context, const Vec2& a, const Vec2& b);
   void setFreeSegmentOracle(FreeSegmentOracle oracle, const void* context) {
     oracle_ = oracle;
@@ -137,7 +141,12 @@ class MinimalConstruct {
   void discoverOne(std::uint32_t global_polygon, bool with_dynamic);
   bool markDiscovered(std::uint32_t global_polygon);  // false when it already was
   bool canFollow(std::int32_t from, std::int32_t to) const;
+  // The way through `from` to `to` if it is shorter and allowed: g, f and parent set (true).
+  bool improve(std::int32_t from, std::int32_t to);
   void relax(std::int32_t from, std::int32_t to);
+  // relax for a node that is not closed and not in the heap (reattachStart's start): its
+  // g, f and parent, no heap operation.
+  void relaxOutsideHeap(std::int32_t from, std::int32_t to);
   void expand(std::int32_t v);
   void repairParent(std::int32_t node);
   // query()'s steps: a kept tree takes the new start (true when the start is found at once,
@@ -177,6 +186,7 @@ class MinimalConstruct {
   Options options_;
   FreeSegmentOracle oracle_ = nullptr;
   const void* oracle_context_ = nullptr;
+  bool oracle_missed_ = false;  // the last edge the oracle was asked about (or skipped) was blocked
   bool staticFree(const Vec2& a, const Vec2& b) const {
     return (oracle_ != nullptr && oracle_(oracle_context_, a, b)) || !static_.segmentBlocked(a, b);
   }
@@ -195,6 +205,14 @@ class MinimalConstruct {
   std::vector<Node> nodes_;
   std::vector<std::int32_t> heap_;
   std::vector<std::int32_t> closed_;             // closed node ids in closing order
+  // startIsNextPop's scan: the open nodes but the start (position, g), valid until the heap's
+  // other nodes or their g change.
+  struct ScanEntry {
+    Vec2 pos{0.0, 0.0};
+    double g = 0.0;
+  };
+  std::vector<ScanEntry> open_scan_;
+  bool open_scan_valid_ = false;
   std::vector<std::uint8_t> static_discovered_;  // persists across queries to the same goal
   std::vector<std::uint8_t> dynamic_discovered_;
   std::vector<std::uint32_t> blockers_;

@@ -174,11 +174,18 @@ void PolygonSet::buildGrid(double cell_size) {
     return Box{a.cwiseMin(b), a.cwiseMax(b)};
   });
   fill(cell_poly_offsets_, cell_polys_, polys_.size(), [&](std::size_t k) { return polys_[k].box; });
+  cell_edge_recs_.resize(cell_edges_.size());
+  for (std::size_t i = 0; i < cell_edges_.size(); ++i) {
+    const std::uint32_t v = cell_edges_[i];
+    cell_edge_recs_[i] = CellEdge{vertices_[v], vertices_[nextVertex(v)], v, vertex_polygon_[v]};
+  }
   has_grid_ = true;
 }
 
 template <typename Visitor>
 bool PolygonSet::forEachEdgeNearSegment(const Vec2& a, const Vec2& b, Visitor&& visit) const {
+  // The edges of the cells the segment crosses, each once, as records (end points and
+  // polygon at hand); without a grid every edge of the polygons whose box the segment's meets.
   if (++stamp_ == 0) {  // wrapped: forget old stamps
     std::fill(edge_stamp_.begin(), edge_stamp_.end(), 0);
     std::fill(poly_stamp_.begin(), poly_stamp_.end(), 0);
@@ -190,7 +197,7 @@ bool PolygonSet::forEachEdgeNearSegment(const Vec2& a, const Vec2& b, Visitor&& 
       const PolyRec& r = polys_[k];
       if (!r.box.overlaps(seg)) continue;
       for (std::uint32_t v = r.first; v < r.first + r.count; ++v) {
-        if (visit(static_cast<std::size_t>(v))) return true;
+        if (visit(CellEdge{vertices_[v], vertices_[nextVertex(v)], v, static_cast<std::uint32_t>(k)})) return true;
       }
     }
     return false;
@@ -217,7 +224,12 @@ bool PolygonSet::forEachEdgeNearSegment(const Vec2& a, const Vec2& b, Visitor&& 
     const int x1 = std::min(static_cast<int>(std::floor((xhi + eps - grid_origin_.x()) / cell_)), grid_w_ - 1);
     for (int x = x0; x <= x1; ++x) {
       const std::size_t cell = static_cast<std::size_t>(y) * grid_w_ + x;
-      if (visitCellEdges(cell, visit)) return true;
+      for (std::uint32_t i = cell_edge_offsets_[cell]; i < cell_edge_offsets_[cell + 1]; ++i) {
+        const CellEdge& e = cell_edge_recs_[i];
+        if (edge_stamp_[e.v] == stamp_) continue;
+        edge_stamp_[e.v] = stamp_;
+        if (visit(e)) return true;
+      }
     }
   }
   return false;
@@ -262,9 +274,9 @@ bool PolygonSet::forEachPolygonNearPoint(const Vec2& p, Visitor&& visit) const {
 // crossing, c not on the segment, and no end of the segment on the edge (the line through
 // it would separate c and d). Most edges near a segment are, and the filter alone says so;
 // the rest of the test is out of line, so this path saves no registers.
-inline bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, std::size_t ci, double bound) const {
-  if (strictlySameSideFiltered(a, b, vertices_[ci], vertices_[nextVertex(ci)], bound)) return false;
-  return edgeNearLineBlocks(a, b, ci, bound);
+inline bool PolygonSet::edgeBlocks(const Vec2& a, const Vec2& b, const CellEdge& e, double bound) const {
+  if (strictlySameSideFiltered(a, b, e.c, e.d, bound)) return false;
+  return edgeNearLineBlocks(a, b, e.v, bound);
 }
 
 [[gnu::noinline]] bool PolygonSet::edgeNearLineBlocks(const Vec2& a, const Vec2& b, std::size_t ci,
@@ -294,16 +306,16 @@ double PolygonSet::orientBound(const Vec2& a, const Vec2& b) const {
 
 bool PolygonSet::segmentBlocked(const Vec2& a, const Vec2& b) const {
   const double bound = orientBound(a, b);
-  return forEachEdgeNearSegment(a, b, [&](std::size_t v) { return edgeBlocks(a, b, v, bound); });
+  return forEachEdgeNearSegment(a, b, [&](const CellEdge& e) { return edgeBlocks(a, b, e, bound); });
 }
 
 std::size_t PolygonSet::segmentBlockers(const Vec2& a, const Vec2& b, std::span<std::uint32_t> out) const {
   const double bound = orientBound(a, b);
   std::size_t n = 0;
-  forEachEdgeNearSegment(a, b, [&](std::size_t v) {
-    const std::uint32_t k = vertex_polygon_[v];
+  forEachEdgeNearSegment(a, b, [&](const CellEdge& e) {
+    const std::uint32_t k = e.k;
     if (poly_stamp_[k] == stamp_) return false;  // already listed
-    if (edgeBlocks(a, b, v, bound)) {
+    if (edgeBlocks(a, b, e, bound)) {
       poly_stamp_[k] = stamp_;
       if (n < out.size()) out[n++] = k;
     }

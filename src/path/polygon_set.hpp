@@ -92,9 +92,16 @@ class PolygonSet {
     Box box;
   };
 
+  // An edge as the segment tests read it: its end points, its start vertex and its polygon.
+  struct CellEdge {
+    Vec2 c{0.0, 0.0};
+    Vec2 d{0.0, 0.0};
+    std::uint32_t v = 0;
+    std::uint32_t k = 0;
+  };
   // Does the segment enter the interior of polygon `k` through the boundary near edge
   // starting at vertex c? (the per-edge part of the exact test, see polygon_set.cpp).
-  bool edgeBlocks(const Vec2& a, const Vec2& b, std::size_t c, double bound) const;
+  bool edgeBlocks(const Vec2& a, const Vec2& b, const CellEdge& e, double bound) const;
   // edgeBlocks past its common rejection (the edge strictly on one side of the segment's line).
   bool edgeNearLineBlocks(const Vec2& a, const Vec2& b, std::size_t c, double bound) const;
   // The static orientation bound (geometry/predicates.hpp) for this set's vertices and the
@@ -135,6 +142,7 @@ class PolygonSet {
   int grid_h_ = 0;
   std::vector<std::uint32_t> cell_edge_offsets_;
   std::vector<std::uint32_t> cell_edges_;
+  std::vector<CellEdge> cell_edge_recs_;  // cell_edges_' edges as records, in the same order
   std::vector<std::uint32_t> cell_poly_offsets_;
   std::vector<std::uint32_t> cell_polys_;
   // Per-query visit stamps so that an edge or polygon listed in several cells is tested once.

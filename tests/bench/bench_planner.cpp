@@ -17,6 +17,7 @@
 // planner's (on the robot the control thread runs under SCHED_FIFO and does not wait).
 //
 //   build/release/tests/bench/bench_planner --benchmark_repetitions=5
+//   STAA_BENCH_SCENES=49-55 STAA_BENCH_PRINT=1 build/release/tests/bench/bench_planner --benchmark_filter=BM_Staa1000/office_empty/
 
 #include "control/control_cycle.hpp"
 #include "map/generate.hpp"
@@ -26,6 +27,8 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <numeric>
 
@@ -125,6 +128,33 @@ double percentile(std::vector<double> v, double p) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size())))];
 }
 
+// For profiling the tail: STAA_BENCH_SCENES=FIRST-LAST runs only those scenes (indices into the
+// drive's scenes; the counters are then of those alone), STAA_BENCH_PRINT=1 prints every call's
+// phases to stderr. Neither is set for the figures.
+struct SceneFilter {
+  std::size_t first = 0;
+  std::size_t last = static_cast<std::size_t>(-1);
+  bool print = false;
+};
+const SceneFilter& sceneFilter() {
+  static const SceneFilter f = [] {
+    SceneFilter r;
+    if (const char* range = std::getenv("STAA_BENCH_SCENES")) {
+      unsigned long a = 0, b = 0;
+      if (std::sscanf(range, "%lu-%lu", &a, &b) == 2 && a <= b) {
+        r.first = a;
+        r.last = b;
+      } else {
+        std::fprintf(stderr, "bench_planner: STAA_BENCH_SCENES: expected FIRST-LAST, got '%s'\n", range);
+        std::exit(2);
+      }
+    }
+    r.print = std::getenv("STAA_BENCH_PRINT") != nullptr;
+    return r;
+  }();
+  return f;
+}
+
 // Per-call figures of passes over the scenes.
 struct Pass {
   std::vector<double> pops_per_ms, succ_per_ms, heuristic_share, collision_share, path_share, local_share, cycle_us,
@@ -150,7 +180,10 @@ Pass runPass(const Setup& s, ControlCycle& cycle, const PlannerBudget& budget, b
   Pass p;
   cycle.planner().setTiming(timing);
   DynamicObstacleSet obstacles(32);
-  for (const Scene& scene : s.scenes) {
+  const SceneFilter& filter = sceneFilter();
+  for (std::size_t si = 0; si < s.scenes.size(); ++si) {
+    if (si < filter.first || si > filter.last) continue;
+    const Scene& scene = s.scenes[si];
     std::vector<PolygonView> views(scene.movers.begin(), scene.movers.end());
     obstacles.set(views, scene.velocities);
     CycleInputs in;
@@ -169,6 +202,12 @@ Pass runPass(const Setup& s, ControlCycle& cycle, const PlannerBudget& budget, b
     p.cycle_us.push_back(cycle_ns * 1e-3);
     p.plan_us.push_back(static_cast<double>(out.plan_ns) * 1e-3);
     p.path_us.push_back(static_cast<double>(out.path_ns) * 1e-3);
+    if (filter.print) {
+      std::fprintf(stderr, "scene %zu path_us %.0f local_us %.0f plan_us %.0f pops %u successors %u\n", si,
+                   static_cast<double>(out.path_ns) * 1e-3, static_cast<double>(out.local_ns) * 1e-3,
+                   static_cast<double>(out.plan_ns) * 1e-3, static_cast<unsigned>(out.plan.stats.pops),
+                   static_cast<unsigned>(out.plan.stats.successors));
+    }
     p.path_share.push_back(100.0 * static_cast<double>(out.path_ns) / cycle_ns);
     p.local_share.push_back(100.0 * static_cast<double>(out.local_ns) / cycle_ns);
     if (timing && out.plan.stats.total_ns > 0) {
