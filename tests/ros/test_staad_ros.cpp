@@ -349,7 +349,11 @@ TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocate
   startBase();
   startStaad(writeConfig("  markers: {rate_hz: 10, tree_hz: 2}\n"));
   const fs::path bag = dir_ / "run.bag";
-  RosProcess record = master_->spawn("rosbag", {"/usr/bin/rosbag", "record", "-O", bag.string(), "/hsrb/command_velocity",
+  // The recorder itself, not the `rosbag record` wrapper: on SIGINT the wrapper exits a quarter
+  // of a second later while its child may still be closing the bag (run.bag.active).
+  const char* const recorder = "/usr/lib/rosbag/record";
+  ASSERT_TRUE(fs::exists(recorder)) << recorder << " (Debian's rosbag package) is missing";
+  RosProcess record = master_->spawn("rosbag", {recorder, "-O", bag.string(), "/hsrb/command_velocity",
                                                 "/hsrb/odom", "/map", "/staad/markers", "/diagnostics",
                                                 "/move_base/status", "/move_base/result", "/move_base/feedback"});
   ASSERT_TRUE(master_->waitForSubscriber("/staad/markers", seconds(10)));
@@ -374,7 +378,9 @@ TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocate
             << " s: " << (*thousand)["cycle"].dump() << "; odometry to twist " << (*thousand)["ros"]["odometry_to_twist"].dump()
             << "\n";
   record.kill(SIGINT);
-  record.wait(milliseconds(5000));
+  const std::optional<int> recorded = record.wait(milliseconds(30'000));
+  ASSERT_TRUE(recorded.has_value()) << "the recorder did not close the bag within 30 s: " << record.err();
+  ASSERT_TRUE(fs::exists(bag)) << "exit code " << *recorded << ": " << record.err();
   const RosRun info = master_->run("baginfo", {"/usr/bin/rosbag", "info", "--yaml", "--key", "topics", bag.string()},
                                    milliseconds(20'000));
   ASSERT_EQ(info.exit_code, 0) << info.err;
