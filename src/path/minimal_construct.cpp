@@ -357,12 +357,16 @@ void MinimalConstruct::expand(std::int32_t v) {
   }
 }
 
-void MinimalConstruct::repairParent(std::int32_t node) {
+void MinimalConstruct::repairParent(std::int32_t node, bool in_heap) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
   n.state = kUnseen;
   n.parent = kNone;
   n.g = kInf;
-  for (const std::int32_t c : closed_) relax(c, node);
+  if (in_heap) {
+    for (const std::int32_t c : closed_) relax(c, node);
+  } else {
+    for (const std::int32_t c : closed_) relaxOutsideHeap(c, node);
+  }
 }
 
 bool MinimalConstruct::edgeKnownBlocked(std::int32_t a, std::int32_t b) const {
@@ -493,16 +497,9 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
       until_check = 15;
     }
     // The search checked the first start edge again after this test (counted as it did);
-    // later tests stand for the search's own checks. (blockedEdgeInto's step, the start kept
-    // out of the heap.)
+    // later tests stand for the search's own checks.
     if (first) ++edge_checks_;
-    markEdgeBlocked(nodes_[static_cast<std::size_t>(target_)].parent, target_);
-    for (std::size_t i = 0; i < start_blockers_; ++i) discoverPolygon(blockers_[i], use_dynamic);
-    Node& t = nodes_[static_cast<std::size_t>(target_)];
-    t.state = kUnseen;
-    t.parent = kNone;
-    t.g = kInf;
-    for (const std::int32_t c : closed_) relaxOutsideHeap(c, target_);
+    blockedEdgeInto(target_, start_blockers_, use_dynamic, /*in_heap=*/false);
   }
   if (nodes_[static_cast<std::size_t>(target_)].state == kOpen) heapPush(target_);
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
@@ -553,16 +550,16 @@ std::size_t MinimalConstruct::edgeBlockers(std::int32_t v, bool use_dynamic) {
   return nb;
 }
 
-void MinimalConstruct::blockedEdgeInto(std::int32_t v, std::size_t nb, bool use_dynamic) {
+void MinimalConstruct::blockedEdgeInto(std::int32_t v, std::size_t nb, bool use_dynamic, bool in_heap) {
   markEdgeBlocked(nodes_[static_cast<std::size_t>(v)].parent, v);
   for (std::size_t i = 0; i < nb; ++i) discoverPolygon(blockers_[i], use_dynamic);
-  repairParent(v);
+  repairParent(v, in_heap);
 }
 
 bool MinimalConstruct::edgeIntoFree(std::int32_t v, bool use_dynamic) {
   const std::size_t nb = edgeBlockers(v, use_dynamic);
   if (nb == 0) return true;
-  blockedEdgeInto(v, nb, use_dynamic);
+  blockedEdgeInto(v, nb, use_dynamic, /*in_heap=*/true);
   return false;
 }
 

@@ -148,7 +148,9 @@ class MinimalConstruct {
   // g, f and parent, no heap operation.
   void relaxOutsideHeap(std::int32_t from, std::int32_t to);
   void expand(std::int32_t v);
-  void repairParent(std::int32_t node);
+  // The node's parent found again among the closed nodes; `in_heap` false keeps it out of the
+  // heap (reattachStart's start, pushed only when the search needs it).
+  void repairParent(std::int32_t node, bool in_heap);
   // query()'s steps: a kept tree takes the new start (true when the start is found at once,
   // without a search), or a new tree is planted at the goal; the search pops until the start
   // is closed, the heap is empty or the deadline passes; the path is traced from the start.
@@ -167,8 +169,8 @@ class MinimalConstruct {
   // The polygons the edge into v (from its parent) runs through, into blockers_ (0: free).
   std::size_t edgeBlockers(std::int32_t v, bool use_dynamic);
   // The step for a blocked edge into v: the edge remembered, its blockers discovered, v
-  // re-parented.
-  void blockedEdgeInto(std::int32_t v, std::size_t blockers, bool use_dynamic);
+  // re-parented (`in_heap` as repairParent's).
+  void blockedEdgeInto(std::int32_t v, std::size_t blockers, bool use_dynamic, bool in_heap);
   void close(std::int32_t v);
   void tracePath(const Vec2& start_in, const Vec2& goal_in, Result& result);
   bool edgeKnownBlocked(std::int32_t a, std::int32_t b) const;

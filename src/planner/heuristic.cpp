@@ -164,10 +164,7 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
   goal_ = goal;
   deadline_ = deadline;
   map_ = &map;
-  if (++memo_stamp_ == 0) {
-    for (MemoEntry& e : memo_) e.stamp = 0;
-    memo_stamp_ = 1;
-  }
+  advanceMemoStamp();
   // The collision grid's clearance (this cycle's) may vouch for free segments of the local
   // paths: their obstacles reach at most local_reach_m beyond the real ones.
   clearance_ = config_.local_reach_m > 0.0 ? clearance : nullptr;

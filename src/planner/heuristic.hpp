@@ -92,7 +92,7 @@ class Heuristic {
   std::span<const Vec2> lastPath() const { return last_path_; }
   // Forgets what the searches kept from earlier cycles (MinimalConstruct::forgetGoal).
   void forgetSearches() {
-    ++memo_stamp_;
+    advanceMemoStamp();
     static_search_.forgetGoal();
     for (MinimalConstruct& mc : dynamic_search_) mc.forgetGoal();
     passage_static_.forgetGoal();
@@ -144,6 +144,14 @@ class Heuristic {
   std::vector<MemoEntry> memo_;
   std::vector<Vec2> memo_path_;
   std::uint32_t memo_stamp_ = 1;
+  // A new stamp empties the memo; at the wrap every entry's stamp is cleared too, so that no
+  // entry from 2^32 stamps ago can match.
+  void advanceMemoStamp() {
+    if (++memo_stamp_ == 0) {
+      for (MemoEntry& e : memo_) e.stamp = 0;
+      memo_stamp_ = 1;
+    }
+  }
   double hFromPath(const UnicycleState& s, std::span<const Vec2> path, double length);
   // pathRtr to G~, with the lengths and directions of segments seen before looked up
   // (direct-mapped, sized at construction; the same values, bit for bit).
