@@ -5,6 +5,7 @@
 #include "geometry/polygon.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -16,12 +17,6 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kNoPolygon = std::numeric_limits<std::uint32_t>::max();
 
-
-// Segment from `at` towards `other` touches the polygon at corner `at` (neighbours prev and
-// next) without cutting into it: both neighbours lie on the same side of the line.
-bool tangentAt(const Vec2& at, const Vec2& other, const Vec2& prev, const Vec2& next, double bound) {
-  return orientSignProduct(at, other, prev, next, bound) >= 0;
-}
 
 // Equal to the bit (0.0 and -0.0 apart): a kept answer is reused only for the very same input.
 bool sameBits(const Vec2& a, const Vec2& b) { return std::memcmp(a.data(), b.data(), 2 * sizeof(double)) == 0; }
@@ -49,12 +44,17 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   dynamic_discovered_.assign(options_.max_dynamic_polygons, 0);
   const std::size_t max_nodes = static_.vertexCount() + options_.max_dynamic_vertices + 2;
   nodes_.reserve(max_nodes);
+  tangency_ = use_tangency_table_ ? TangencyTable::forSet(static_) : nullptr;
+  corner_node_.assign(tangency_ ? tangency_->corners() : 0, kNone);
+  other_nodes_.clear();
+  other_nodes_.reserve(max_nodes);
   target_blocked_.clear();
   target_blocked_.reserve(max_nodes);
   heap_.reserve(max_nodes);
   open_scan_.reserve(max_nodes);
   open_scan_valid_ = false;
   closed_.reserve(max_nodes);
+  closed_corner_.reserve(max_nodes);
   path_.reserve(max_nodes + 2);
   blockers_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
   covering_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
@@ -181,9 +181,12 @@ void MinimalConstruct::resetSearch(const Vec2& goal, bool with_dynamic) {
   tree_valid_ = false;
   std::fill(dynamic_discovered_.begin(), dynamic_discovered_.end(), 0);
   nodes_.clear();
+  std::fill(corner_node_.begin(), corner_node_.end(), kNone);
+  other_nodes_.clear();
   heap_.clear();
   open_scan_valid_ = false;
   closed_.clear();
+  closed_corner_.clear();
   if (++blocked_generation_ == 0) {
     std::fill(blocked_gen_.begin(), blocked_gen_.end(), 0);
     blocked_generation_ = 1;
@@ -269,25 +272,36 @@ void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynam
     node.next = set.vertex(set.nextVertex(v));
     node.vertex = static_cast<std::int32_t>(v + offset);
     nodes_.push_back(node);
+    const auto id = static_cast<std::int32_t>(nodes_.size() - 1);
+    const std::int32_t corner = staticCorner(node);
+    if (corner >= 0) {
+      corner_node_[static_cast<std::size_t>(corner)] = id;
+    } else if (tangency_) {
+      other_nodes_.push_back(id);
+    }
   }
   // Connect the new corners to everything already closed (the repair step).
   for (std::size_t n = first_new; n < nodes_.size(); ++n) {
-    for (const std::int32_t c : closed_) relax(c, static_cast<std::int32_t>(n));
+    relaxFromClosed(static_cast<std::int32_t>(n), /*in_heap=*/true);
   }
 }
 
 bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
   const Node& a = nodes_[static_cast<std::size_t>(from)];
   const Node& b = nodes_[static_cast<std::size_t>(to)];
+  // Two static corners: both tangency tests from the table (the same exact answers).
+  const std::int32_t ca = staticCorner(a), cb = ca >= 0 ? staticCorner(b) : -1;
+  const bool tangents_known = cb >= 0;
+  if (tangents_known && !tangency_->joinable(ca, cb)) return false;
   if (a.vertex != kNone) {
-    if (!tangentAt(a.pos, b.pos, a.prev, a.next, orient_bound_)) return false;
+    if (!tangents_known && !tangentAt(a.pos, b.pos, a.prev, a.next, orient_bound_)) return false;
     // The path must turn around the corner, towards the side the polygon lies on.
     if (a.turn != 0) {
       const int turn = orientSign(nodes_[static_cast<std::size_t>(a.parent)].pos, a.pos, b.pos, orient_bound_);
       if (turn != 0 && turn != a.turn) return false;
     }
   }
-  return b.vertex == kNone || tangentAt(b.pos, a.pos, b.prev, b.next, orient_bound_);
+  return tangents_known || b.vertex == kNone || tangentAt(b.pos, a.pos, b.prev, b.next, orient_bound_);
 }
 
 // Forced inline: repairParent runs it over the whole closed list for every blocked edge,
@@ -322,6 +336,8 @@ void MinimalConstruct::relaxOutsideHeap(std::int32_t from, std::int32_t to) {
 void MinimalConstruct::expand(std::int32_t v) {
   // relax(v, w) for every node, with v's data hoisted and the cheap rejections first: most
   // candidates fail a tangency test, so the distance (a square root) is computed for few.
+  // Which node is relaxed first changes nothing: each is relaxed from v alone, and the heap
+  // pops in a strict order (f, g, id).
   const Node& a = nodes_[static_cast<std::size_t>(v)];
   const Vec2 pa = a.pos, prev = a.prev, next = a.next;
   const bool corner = a.vertex != kNone;
@@ -329,22 +345,22 @@ void MinimalConstruct::expand(std::int32_t v) {
   const Vec2 pu = turn != 0 ? nodes_[static_cast<std::size_t>(a.parent)].pos : pa;
   const double ga = a.g;
   const double bound = orient_bound_;
-  const std::size_t n = nodes_.size();
-  for (std::size_t w = 0; w < n; ++w) {
+  // tangents_known: w passed both tangency tests (the table's row).
+  const auto relaxFromV = [&](std::size_t w, bool tangents_known) {
     Node& b = nodes_[w];
-    if (b.state == kClosed) continue;
+    if (b.state == kClosed) return;
     if (corner) {
-      if (!tangentAt(pa, b.pos, prev, next, bound)) continue;
+      if (!tangents_known && !tangentAt(pa, b.pos, prev, next, bound)) return;
       if (turn != 0) {
         const int t = orientSign(pu, pa, b.pos, bound);
-        if (t != 0 && t != turn) continue;
+        if (t != 0 && t != turn) return;
       }
     }
-    if (b.vertex != kNone && !tangentAt(b.pos, pa, b.prev, b.next, bound)) continue;
+    if (!tangents_known && b.vertex != kNone && !tangentAt(b.pos, pa, b.prev, b.next, bound)) return;
     const double g = ga + (b.pos - pa).norm();
-    if (b.state == kOpen && g >= b.g) continue;
+    if (b.state == kOpen && g >= b.g) return;
     const auto to = static_cast<std::int32_t>(w);
-    if (edgeKnownBlocked(v, to)) continue;
+    if (edgeKnownBlocked(v, to)) return;
     b.g = g;
     b.f = g + (target_pos_ - b.pos).norm();
     b.parent = v;
@@ -354,6 +370,23 @@ void MinimalConstruct::expand(std::int32_t v) {
       b.state = kOpen;
       heapPush(to);
     }
+  };
+  const std::int32_t row_corner = staticCorner(a);
+  if (row_corner < 0) {
+    const std::size_t n = nodes_.size();
+    for (std::size_t w = 0; w < n; ++w) relaxFromV(w, false);
+    return;
+  }
+  relaxFromV(0, false);
+  if (nodes_.size() > 1) relaxFromV(1, false);
+  for (const std::int32_t w : other_nodes_) relaxFromV(static_cast<std::size_t>(w), false);
+  const std::span<const std::uint64_t> row = tangency_->row(row_corner);
+  for (std::size_t word = 0; word < row.size(); ++word) {
+    for (std::uint64_t bits = row[word]; bits != 0; bits &= bits - 1) {
+      const std::size_t c = 64 * word + static_cast<std::size_t>(std::countr_zero(bits));
+      const std::int32_t w = corner_node_[c];
+      if (w != kNone) relaxFromV(static_cast<std::size_t>(w), true);
+    }
   }
 }
 
@@ -362,10 +395,28 @@ void MinimalConstruct::repairParent(std::int32_t node, bool in_heap) {
   n.state = kUnseen;
   n.parent = kNone;
   n.g = kInf;
-  if (in_heap) {
-    for (const std::int32_t c : closed_) relax(c, node);
-  } else {
-    for (const std::int32_t c : closed_) relaxOutsideHeap(c, node);
+  relaxFromClosed(node, in_heap);
+}
+
+void MinimalConstruct::relaxFromClosed(std::int32_t node, bool in_heap) {
+  const std::int32_t corner = staticCorner(nodes_[static_cast<std::size_t>(node)]);
+  if (corner < 0) {
+    if (in_heap) {
+      for (const std::int32_t c : closed_) relax(c, node);
+    } else {
+      for (const std::int32_t c : closed_) relaxOutsideHeap(c, node);
+    }
+    return;
+  }
+  const std::uint64_t* row = tangency_->row(corner).data();
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    const std::int32_t cc = closed_corner_[i];
+    if (cc >= 0 && ((row[static_cast<std::size_t>(cc) >> 6] >> (static_cast<std::size_t>(cc) & 63)) & 1U) == 0) continue;
+    if (in_heap) {
+      relax(closed_[i], node);
+    } else {
+      relaxOutsideHeap(closed_[i], node);
+    }
   }
 }
 
@@ -464,6 +515,7 @@ MinimalConstruct::StartStep MinimalConstruct::startIsNextPop(bool use_dynamic, R
   if (start_blockers_ > 0) return StartStep::kBlocked;
   t.state = kClosed;
   closed_.push_back(target_);
+  closed_corner_.push_back(-1);
   ++result.expansions;
   return StartStep::kFound;
 }
@@ -473,7 +525,10 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   // Retire the previous start: it was never expanded, so nothing hangs below it, and its
   // node takes the new start.
   if (nodes_[kTarget].state == kOpen) heapRemove(kTarget);
-  if (!closed_.empty() && closed_.back() == kTarget) closed_.pop_back();
+  if (!closed_.empty() && closed_.back() == kTarget) {
+    closed_.pop_back();
+    closed_corner_.pop_back();
+  }
   target_ = addTargetNode(start);
   // The start stays out of the heap until the search needs it there: the test below excludes
   // it anyway, and the heap pops in a strict order (f, g, id), so where it sat changes no pop.
@@ -573,6 +628,7 @@ void MinimalConstruct::close(std::int32_t v) {
     node.turn = static_cast<std::int8_t>(side);
   }
   closed_.push_back(v);
+  closed_corner_.push_back(staticCorner(node));
 }
 
 MinimalConstruct::Status MinimalConstruct::search(bool use_dynamic, const Deadline& deadline, std::uint32_t until_check,

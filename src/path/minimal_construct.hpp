@@ -26,8 +26,10 @@
 
 #include "path/deadline.hpp"
 #include "path/polygon_set.hpp"
+#include "path/tangency_table.hpp"
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -101,6 +103,10 @@ class MinimalConstruct {
   // `with_dynamic`. The returned span stays valid until the next query. The deadline is
   // checked every 16 expansions (a few microseconds apart).
   Result query(const Vec2& start, const Vec2& goal, bool with_dynamic, const Deadline& deadline = {});
+  // The static corners' pairwise tangency is precomputed by setStaticObstacles (TangencyTable,
+  // shared between searches over the same obstacles): the same answers, faster expansions.
+  // Off (for the next setStaticObstacles): every expansion tests every node, as a reference.
+  void setTangencyTable(bool on) { use_tangency_table_ = on; }
 
   // Is a point free (outside every obstacle's interior) / is a segment free?
   bool pointFree(const Vec2& p, bool with_dynamic) const;
@@ -151,6 +157,9 @@ class MinimalConstruct {
   // The node's parent found again among the closed nodes; `in_heap` false keeps it out of the
   // heap (reattachStart's start, pushed only when the search needs it).
   void repairParent(std::int32_t node, bool in_heap);
+  // relax(c, node) for every closed c in closing order (relaxOutsideHeap when !in_heap); with
+  // the table, closed corners outside a static corner's row are skipped (canFollow's answer).
+  void relaxFromClosed(std::int32_t node, bool in_heap);
   // query()'s steps: a kept tree takes the new start (true when the start is found at once,
   // without a search), or a new tree is planted at the goal; the search pops until the start
   // is closed, the heap is empty or the deadline passes; the path is traced from the start.
@@ -205,8 +214,23 @@ class MinimalConstruct {
 
   // Search workspace, sized at setStaticObstacles / by the dynamic capacity.
   std::vector<Node> nodes_;
+  // The static corners' pairwise tangency (null without one: too many corners). With it an
+  // expansion of a static corner visits the corners its row lists (corner_node_: each
+  // corner's node in this search, or kNone) and the other nodes (other_nodes_: dynamic
+  // corners; the goal and the start, nodes 0 and 1, are always visited).
+  bool use_tangency_table_ = true;
+  std::shared_ptr<const TangencyTable> tangency_;
+  std::vector<std::int32_t> corner_node_;
+  std::vector<std::int32_t> other_nodes_;
+  // The static corner index of a node (-1: none, or no table).
+  std::int32_t staticCorner(const Node& n) const {
+    return tangency_ && n.vertex != kNone && static_cast<std::size_t>(n.vertex) < static_.vertexCount()
+               ? tangency_->cornerOf(static_cast<std::size_t>(n.vertex))
+               : -1;
+  }
   std::vector<std::int32_t> heap_;
   std::vector<std::int32_t> closed_;             // closed node ids in closing order
+  std::vector<std::int32_t> closed_corner_;      // their static corner indices (-1: none)
   // startIsNextPop's scan: the open nodes but the start (position, g), valid until the heap's
   // other nodes or their g change.
   struct ScanEntry {
