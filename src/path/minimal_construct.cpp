@@ -289,9 +289,10 @@ void MinimalConstruct::discoverOne(std::uint32_t global_polygon, bool with_dynam
 bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
   const Node& a = nodes_[static_cast<std::size_t>(from)];
   const Node& b = nodes_[static_cast<std::size_t>(to)];
-  // Two static corners: both tangency tests from the table (the same exact answers).
-  const std::int32_t ca = staticCorner(a), cb = ca >= 0 ? staticCorner(b) : -1;
-  const bool tangents_known = cb >= 0;
+  // Two static corners: both tangency tests from the table (the same exact answers). `to`
+  // first: in the warm queries it is the start, and the lookups cost nothing then.
+  const std::int32_t cb = staticCorner(b), ca = cb >= 0 ? staticCorner(a) : -1;
+  const bool tangents_known = ca >= 0;
   if (tangents_known && !tangency_->joinable(ca, cb)) return false;
   if (a.vertex != kNone) {
     if (!tangents_known && !tangentAt(a.pos, b.pos, a.prev, a.next, orient_bound_)) return false;
@@ -329,7 +330,8 @@ bool MinimalConstruct::canFollow(std::int32_t from, std::int32_t to) const {
   }
 }
 
-void MinimalConstruct::relaxOutsideHeap(std::int32_t from, std::int32_t to) {
+// Forced inline as relax: the re-attach runs it over the whole closed list.
+[[gnu::always_inline]] inline void MinimalConstruct::relaxOutsideHeap(std::int32_t from, std::int32_t to) {
   if (improve(from, to)) nodes_[static_cast<std::size_t>(to)].state = kOpen;
 }
 
@@ -345,8 +347,9 @@ void MinimalConstruct::expand(std::int32_t v) {
   const Vec2 pu = turn != 0 ? nodes_[static_cast<std::size_t>(a.parent)].pos : pa;
   const double ga = a.g;
   const double bound = orient_bound_;
-  // tangents_known: w passed both tangency tests (the table's row).
-  const auto relaxFromV = [&](std::size_t w, bool tangents_known) {
+  // tangents_known: w passed both tangency tests (the table's row). Inlined into each loop (a
+  // call per node costs more than most nodes' tests).
+  const auto relaxFromV = [&](std::size_t w, bool tangents_known) __attribute__((always_inline)) {
     Node& b = nodes_[w];
     if (b.state == kClosed) return;
     if (corner) {
@@ -371,8 +374,10 @@ void MinimalConstruct::expand(std::int32_t v) {
       heapPush(to);
     }
   };
+  // The row when it lists fewer corners than the search has nodes (a search that discovered
+  // little of the map tests its few nodes faster).
   const std::int32_t row_corner = staticCorner(a);
-  if (row_corner < 0) {
+  if (row_corner < 0 || tangency_->rowCount(row_corner) >= nodes_.size()) {
     const std::size_t n = nodes_.size();
     for (std::size_t w = 0; w < n; ++w) relaxFromV(w, false);
     return;

@@ -1,5 +1,6 @@
 #include "path/tangency_table.hpp"
 
+#include <bit>
 #include <cstring>
 #include <mutex>
 
@@ -38,6 +39,10 @@ TangencyTable::TangencyTable(const PolygonSet& set) {
       bits_[a * words_ + (b >> 6)] |= std::uint64_t{1} << (b & 63);
       bits_[b * words_ + (a >> 6)] |= std::uint64_t{1} << (a & 63);
     }
+  }
+  row_count_.assign(corners_, 0);
+  for (std::size_t a = 0; a < corners_; ++a) {
+    for (std::size_t w = 0; w < words_; ++w) row_count_[a] += static_cast<std::uint32_t>(std::popcount(bits_[a * words_ + w]));
   }
 }
 

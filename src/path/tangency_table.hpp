@@ -41,6 +41,8 @@ class TangencyTable {
     const auto ub = static_cast<std::size_t>(b);
     return ((bits_[static_cast<std::size_t>(a) * words_ + (ub >> 6)] >> (ub & 63)) & 1U) != 0;
   }
+  // How many corners corner a is joinable with (its row's bits).
+  std::uint32_t rowCount(std::int32_t a) const { return row_count_[static_cast<std::size_t>(a)]; }
   // Corner a's row: bit b of word b / 64 is joinable(a, b).
   std::span<const std::uint64_t> row(std::int32_t a) const {
     return {bits_.data() + static_cast<std::size_t>(a) * words_, words_};
@@ -57,6 +59,7 @@ class TangencyTable {
   std::size_t corners_ = 0;
   std::size_t words_ = 0;
   std::vector<std::uint64_t> bits_;
+  std::vector<std::uint32_t> row_count_;
 };
 
 }  // namespace staa
