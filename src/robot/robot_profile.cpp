@@ -5,6 +5,8 @@
 #include "geometry/polygon.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <string_view>
 
 namespace staa {
@@ -14,6 +16,14 @@ constexpr std::string_view kFormat = "staa-robot/1";
 
 Polygon readFootprint(const io::ConfigValue& node) {
   Polygon poly = node.polygon();
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    if (std::abs(poly[i].x()) > RobotProfile::kMaxFootprintM || std::abs(poly[i].y()) > RobotProfile::kMaxFootprintM) {
+      std::ostringstream problem;
+      problem << "vertex " << i << " (" << poly[i].x() << ", " << poly[i].y() << ") is beyond "
+              << RobotProfile::kMaxFootprintM << " m of the robot's origin in x or y";
+      node[i].fail(problem.str());
+    }
+  }
   // The robot's reference point (its pose) must lie strictly inside its own body: the
   // planner's centroid/corner checks and the circumradius inflation assume it.
   if (locatePoint(Vec2::Zero(), poly) != Containment::kInside) node.fail("does not contain the robot's origin (0, 0) strictly inside");

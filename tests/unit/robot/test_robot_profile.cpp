@@ -206,6 +206,23 @@ TEST(RobotProfile, SelfIntersectingFootprintIsRejected) {
   EXPECT_THAT(e, HasSubstr("self-intersecting"));
 }
 
+// Found by the robot_profile fuzzer: vertices near 1e307 m made a simple footprint whose area
+// overflowed (not counter-clockwise by signedArea). A footprint is a base's: within 10 m.
+TEST(RobotProfile, AFootprintVertexBeyond10mIsRejectedWithItsIndexAndValue) {
+  const std::string far = errorOf(withLine("[[0.3, 0.3], [-10.5, 0.3], [-0.3, -0.3], [0.3, -0.3]]", kLimits));
+  EXPECT_THAT(far, HasSubstr("robot.yaml:3: footprint[1]: vertex 1 (-10.5, 0.3) is beyond 10 m of the robot's origin"));
+  // The fuzzer's input (tests/fuzz/regressions/robot_profile): simple, holds the origin.
+  const std::string huge = errorOf(withLine(
+      "[[0.215, 0.0], [0.198634, 720807.2], [0.15202, 82277], [-0.1521e308, 2028], [5.19864, -6666082277], "
+      "[-0.1501e308, 28]]",
+      kLimits));
+  EXPECT_THAT(huge, HasSubstr("footprint[1]: vertex 1 (0.198634, 720807) is beyond 10 m"));
+  // At the bound: a 20 m long vehicle loads, counter-clockwise.
+  const RobotProfile p = parseRobotProfile(withLine("[[10, -1], [10, 1], [-10, 1], [-10, -1]]", kLimits), "robot.yaml");
+  EXPECT_DOUBLE_EQ(p.circumradius(), std::hypot(10.0, 1.0));
+  EXPECT_GT(signedArea(p.footprint), 0.0);
+}
+
 TEST(RobotProfile, FootprintNotContainingTheOriginIsRejected) {
   const std::string e = errorOf(withLine("[[1, 1], [2, 1], [2, 2], [1, 2]]", kLimits));
   EXPECT_THAT(e, HasSubstr("robot.yaml:3: footprint"));
