@@ -29,8 +29,9 @@ class TangencyTable {
   static constexpr std::size_t kMaxCorners = 4096;
 
   // The table of `set`'s convex corners, shared with every earlier call for a set of the same
-  // vertices (bit for bit, in the same order and polygons) that is still alive; nullptr when the set has
-  // no convex corner or more than kMaxCorners. Thread-safe (a lock, at construction only).
+  // vertices (bit for bit, in the same order and polygons) that is still alive; nullptr when
+  // the set has no convex corner or more than kMaxCorners. Thread-safe (a lock, at
+  // construction only).
   static std::shared_ptr<const TangencyTable> forSet(const PolygonSet& set);
 
   // The corner index of a vertex, or -1 when it is no convex corner.

@@ -62,7 +62,7 @@ struct RobotProfile {
   std::string name;
   Polygon footprint;  // robot frame, metres, counter-clockwise after loading
   // How far a footprint vertex may lie from the robot's origin (m, each coordinate): a base,
-  // not a building (beyond it areas and radii of the polygon stop being finite numbers).
+  // not a building. Unbounded, coordinates near 1e307 overflow the footprint's area.
   static constexpr double kMaxFootprintM = 10.0;
   MotionLimits limits;
   // How tall the body is (m): other robots' depth cameras see the footprint as a prism this tall.
