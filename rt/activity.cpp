@@ -63,10 +63,14 @@ void PeriodicActivity::run() {
     const Wake wake = loop.wait();
     // The body's own CPU time and its measured stalls tell an execution overrun (ours) from
     // a body kept off the CPU (the platform's: preemption, a virtual machine's stolen time).
+    // Voluntary switches tell a body that blocked (ours) from one that was stopped.
+    const std::int64_t sw0 = clock_.voluntarySwitches();
     const Nanos cpu0 = clock_.threadCpuTime();
     runnable_.step(wake.woke);
     const Nanos cpu1 = clock_.threadCpuTime();
-    loop.finish(cpu0 >= 0 && cpu1 >= 0 ? cpu1 - cpu0 : -1, runnable_.lastStall());
+    const std::int64_t sw1 = clock_.voluntarySwitches();
+    loop.finish(cpu0 >= 0 && cpu1 >= 0 ? cpu1 - cpu0 : -1, runnable_.lastStall(),
+                sw0 >= 0 && sw1 >= 0 ? sw1 - sw0 : -1);
     counters_.store(loop.counters());
   }
   runnable_.stop(clock_.now());

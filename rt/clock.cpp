@@ -3,6 +3,8 @@
 #include <cerrno>
 #include <ctime>
 
+#include <sys/resource.h>
+
 namespace staa::rt {
 
 namespace {
@@ -31,6 +33,12 @@ Nanos threadCpuTime() {
   timespec ts{};
   if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0) return -1;
   return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
+}
+
+std::int64_t threadVoluntarySwitches() {
+  rusage ru{};
+  if (getrusage(RUSAGE_THREAD, &ru) != 0) return -1;
+  return static_cast<std::int64_t>(ru.ru_nvcsw);
 }
 
 Nanos MonotonicClock::now() const { return monotonicNow(); }

@@ -19,6 +19,12 @@ Nanos monotonicNow();
 // CPU time consumed by the calling thread so far (CLOCK_THREAD_CPUTIME_ID), -1 if unavailable.
 Nanos threadCpuTime();
 
+// Voluntary context switches of the calling thread so far (getrusage RUSAGE_THREAD's
+// ru_nvcsw: the thread slept, waited on a lock or for I/O), -1 if unavailable. A virtual
+// machine's stolen time and preemption never count here, which is what tells a body that
+// blocked (ours) from one the platform stopped.
+std::int64_t threadVoluntarySwitches();
+
 class Clock {
  public:
   // The clock read through a plain function pointer (path/deadline.hpp's ClockFn is one).
@@ -32,6 +38,8 @@ class Clock {
   // The CPU time the calling thread has used, on this clock's terms; -1 when it has none (a
   // test's time line, where a body's execution is only what the test advanced).
   virtual Nanos threadCpuTime() const { return -1; }
+  // The calling thread's voluntary context switches so far; -1 when the clock has none.
+  virtual std::int64_t voluntarySwitches() const { return -1; }
   // now() as a plain function, or nullptr when the clock lives in an object (a test's).
   virtual NowFunction nowFunction() const { return nullptr; }
 };
@@ -42,6 +50,7 @@ class MonotonicClock final : public Clock {
   Nanos now() const override;
   int sleepUntil(Nanos deadline) override;
   Nanos threadCpuTime() const override { return rt::threadCpuTime(); }
+  std::int64_t voluntarySwitches() const override { return rt::threadVoluntarySwitches(); }
   NowFunction nowFunction() const override;
 };
 

@@ -39,8 +39,12 @@ std::uint64_t PeriodicLoop::finish() { return finish(-1); }
 
 std::uint64_t PeriodicLoop::finish(Nanos cpu_time) { return finish(cpu_time, 0); }
 
-std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall) {
+std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall) { return finish(cpu_time, stall, -1); }
+
+std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall, std::int64_t switches) {
   const Nanos now = clock_.now();
+  const bool blocked = switches > 0;
+  if (blocked) ++counters_.blocked_cycles;
   last_exec_ = now - last_wake_.woke;
   exec_.record(last_exec_);
   ++counters_.cycles;
@@ -59,6 +63,8 @@ std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall) {
     ++counters_.overruns;
     if (last_exec_ <= period_) {
       ++counters_.late_wakeups;
+    } else if (blocked) {
+      ++counters_.execution_overruns;
     } else if (stalled && own <= period_) {
       ++counters_.stalls;
     } else if (cpu_time >= 0 && cpu_time <= period_) {

@@ -6,6 +6,9 @@
 // this order (exec: the body's wall-clock time from its wake-up to its end):
 //   - late wake-up (the platform's): exec fit in a period, but the body woke so late that it
 //     ended past the next deadline;
+//   - blocked (ours): the body made a voluntary context switch (it slept, waited on a lock or
+//     for I/O; finish(cpu_time, stall, switches)); counted as an execution overrun, since
+//     the time off the CPU was the body's own doing, never a stall or preemption;
 //   - stall (the platform's): given the largest gap between two clock reads of the body
 //     (finish(cpu_time, stall), rt/stall_probe.hpp), a gap of at least kStallGap during
 //     which the thread did not run, without which exec would have fit in a period;
@@ -37,6 +40,9 @@ struct PeriodicCounters {
   std::uint64_t stalls = 0;               // ... of them, because of a measured stall (>= kStallGap)
   std::uint64_t skipped_periods = 0;      // deadlines dropped in all
   std::uint64_t sleep_errors = 0;         // sleepUntil returned non-zero
+  // Cycles whose body blocked (a voluntary context switch), overrun or not: a real-time
+  // body never should, so any is a defect to find, like an allocation.
+  std::uint64_t blocked_cycles = 0;
   // The longest body less its stall (a gap >= kStallGap, when one was measured): the
   // longest the body's own work took, the platform's stalls taken out.
   Nanos max_own_execution = 0;
@@ -72,6 +78,9 @@ class PeriodicLoop {
   // measured): an overrun whose body, without a gap of at least kStallGap, fits in a period
   // is a stall of the platform. cpu_time < 0: not measured.
   std::uint64_t finish(Nanos cpu_time, Nanos stall);
+  // The same, with the body's voluntary context switches (`switches`, < 0 when not measured):
+  // a body that switched is counted in blocked_cycles, and its overrun is ours.
+  std::uint64_t finish(Nanos cpu_time, Nanos stall, std::int64_t switches);
 
   Nanos period() const { return period_; }
   Nanos nextDeadline() const { return deadline_; }

@@ -100,6 +100,7 @@ TEST_F(StaadDepth, DrivesToTheGoalOnRenderedDepthFrames) {
   EXPECT_LE(std::hypot(s["pose"][0].get<double>() - 10.5, s["pose"][1].get<double>() - 4.5), 0.22) << json;
   EXPECT_TRUE(s["fault"].is_null()) << json;
   EXPECT_EQ(s["rt_allocations"], 0) << json;
+  EXPECT_EQ(s["blocked_cycles"], 0) << "a control cycle blocked: " << json;
   // Depth frames keep arriving at 30 Hz.
   EXPECT_GE(s["staleness"]["obstacles_s"].get<double>(), 0.0);
   EXPECT_LT(s["staleness"]["obstacles_s"].get<double>(), 0.2) << json;

@@ -7,7 +7,10 @@ come (a goal every --goal-every requests, for the room the robot is driving to),
 connects every --probe-interval seconds on a connection of its own, sends stop and measures
 the round trip, then sends the room's goal again so the robot keeps driving between the
 office's rooms. Checks: every reply is valid JSON of the expected shape, the control thread
-has zero overruns during the load, zero allocations in real-time threads (every status says
+has zero overruns during the load but the measured stalls of the platform (a gap of 3 ms or
+more in which the thread did not run and did not block: a virtual machine's stolen time; the
+daemon attributes each, docs/ARCHITECTURE.md section 3), no cycle of a real-time thread
+blocked (blocked_cycles 0), zero allocations in real-time threads (every status says
 rt_allocations 0), every stop is answered within --max-stop-ms, and staad exits 0 on SIGTERM.
 socket.max_clients is 18 (room for the clients and the probe): no client may be dropped.
 
@@ -58,7 +61,8 @@ def status_problem(reply):
     cycle = s.get("cycle")
     if not isinstance(cycle, dict) or not all(isinstance(cycle.get(k), (int, float)) for k in ("p50_us", "p99_us", "max_us", "overruns", "count")):
         return "cycle %r" % cycle
-    for key in ("goal_id", "queued_goal_id", "rt_allocations", "execution_overruns", "late_wakeups"):
+    for key in ("goal_id", "queued_goal_id", "rt_allocations", "execution_overruns", "late_wakeups", "preempted",
+                "stalls", "blocked_cycles"):
         if not isinstance(s.get(key), int):
             return "%s %r" % (key, s.get(key))
     if not isinstance(s.get("threads", {}).get("base"), dict) or not isinstance(s.get("time_s"), (int, float)):
@@ -257,14 +261,21 @@ def main():
     overruns = after["cycle"]["overruns"] - before["cycle"]["overruns"]
     exec_overruns = after["execution_overruns"] - before["execution_overruns"]
     late = after["late_wakeups"] - before["late_wakeups"]
+    preempted = after["preempted"] - before["preempted"]
+    stalls = after["stalls"] - before["stalls"]
+    blocked = {"control": after["blocked_cycles"] - before["blocked_cycles"],
+               "base": after["threads"]["base"].get("blocked_cycles", 0) - before["threads"]["base"].get("blocked_cycles", 0)}
     cycles = after["cycle"]["count"] - before["cycle"]["count"]
     print("load: %d clients for %.0f s, control %s" % (args.clients, args.duration, "SCHED_FIFO" if after["realtime"] else "normal scheduling"))
     print("replies: %d status + %d goals (%d busy) = %.0f a second; %d invalid; %d client connections dropped (%d probes)" % (
         status_replies, goal_replies, busy, (status_replies + goal_replies) / args.duration, len(bad), drops, probes))
     print("stop round trip over %d probes: p50 %.2f ms, p99 %.2f ms, max %.2f ms" % (
         len(stop_ms), percentile(stop_ms, 50), percentile(stop_ms, 99), max(stop_ms) if stop_ms else float("nan")))
-    print("control thread over %d cycles: overruns %d (execution %d), late wakeups %d, cycle p99 %s us max %s us" % (
-        cycles, overruns, exec_overruns, late, after["cycle"]["p99_us"], after["cycle"]["max_us"]))
+    print("control thread over %d cycles: overruns %d (execution %d, late wakeups %d, preempted %d, stalls %d), "
+          "cycle p99 %s us max %s us, own max %s us" % (
+        cycles, overruns, exec_overruns, late, preempted, stalls, after["cycle"]["p99_us"], after["cycle"]["max_us"],
+        after["own_execution_max_us"]))
+    print("blocked cycles: control %d, base %d" % (blocked["control"], blocked["base"]))
     print("rt_allocations %d; rooms reached %d; staad exit %s" % (after["rt_allocations"], reached, code))
 
     failures += bad[:5]
@@ -274,8 +285,13 @@ def main():
         failures.append("a stop took %.2f ms (limit %.0f ms)" % (max(stop_ms), args.max_stop_ms))
     if len(stop_ms) < probes:
         failures.append("%d of %d stop probes unanswered" % (probes - len(stop_ms), probes))
-    if overruns != 0:
-        failures.append("%d control-thread overruns" % overruns)
+    # A measured stall is time the platform took (the thread neither ran nor blocked): not the
+    # load's doing, reported above and not gated; every other overrun fails the run.
+    if overruns - stalls != 0:
+        failures.append("%d control-thread overruns besides %d measured stalls" % (overruns - stalls, stalls))
+    for name, n in blocked.items():
+        if n != 0:
+            failures.append("%d cycles of the %s thread blocked (a voluntary context switch)" % (n, name))
     if after["rt_allocations"] != 0:
         failures.append("%d allocations in real-time threads" % after["rt_allocations"])
     if drops > 0 and args.clients < args.max_clients:

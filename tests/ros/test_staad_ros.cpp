@@ -374,6 +374,8 @@ TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocate
                                    milliseconds(60'000));
   ASSERT_TRUE(thousand);
   EXPECT_EQ((*thousand)["rt_allocations"], 0);
+  EXPECT_EQ((*thousand)["blocked_cycles"], 0) << "a control cycle blocked (the ROS bridge must never make it wait)";
+  EXPECT_EQ((*thousand)["threads"]["base"]["blocked_cycles"], 0) << "a base cycle blocked";
   std::cout << "1,000 cycles after " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
             << " s: " << (*thousand)["cycle"].dump() << "; odometry to twist " << (*thousand)["ros"]["odometry_to_twist"].dump()
             << "\n";

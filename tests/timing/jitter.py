@@ -8,6 +8,8 @@ writes DIR/jitter.json, DIR/jitter.svg and DIR/jitter.png, and checks the gates:
   - zero overruns of ours on every periodic thread (execution past the period, after the
     platform's stalls are taken out: the daemon attributes every overrun itself);
   - zero allocations in real-time threads (the status's rt_allocations);
+  - no cycle of a real-time thread blocked (histograms' blocked_cycles: a voluntary context
+    switch, getrusage RUSAGE_THREAD);
   - the control cycle's own execution (its longest cycle less a measured stall, the status's
     own_execution_max_us) never past the planner's wall-clock budget plus the longest path
     and local-map steps of the run (status planner.{budget_ms, path_max_us, local_max_us}):
@@ -129,7 +131,7 @@ def thread_section(h):
             "overruns": {"ours": o["ours"], "late_wakeup": o["late_wakeup"], "preempted": o["preempted"],
                          "stall": o["stall"]},
             "cycles": h["cycles"], "period_us": h["period_us"], "own_execution_max_us": h["own_execution_max_us"],
-            "realtime": h["realtime"]}
+            "blocked_cycles": h["blocked_cycles"], "realtime": h["realtime"]}
 
 
 def gates(section, status, long_run):
@@ -145,6 +147,10 @@ def gates(section, status, long_run):
         ours = t["overruns"]["ours"]
         gate(f"{name}.overruns_ours", ours == 0, True,
              f"{name}: {ours} overruns ours (execution past the {t['period_us'] / 1000:.1f} ms period)", value=ours,
+             limit=0)
+        blocked = t["blocked_cycles"]
+        gate(f"{name}.blocked_cycles", blocked == 0, True,
+             f"{name}: {blocked} cycles blocked (a voluntary context switch in a real-time cycle)", value=blocked,
              limit=0)
     alloc = section["rt_allocations"]
     gate("rt_allocations", alloc == 0, True,
@@ -363,7 +369,8 @@ def summary_lines(section):
         w, e, o = t["wake_us"], t["exec_us"], t["overruns"]
         lines.append(f"{name}: {t['cycles']} cycles; wake p50/p99/max {w['p50']:.0f}/{w['p99']:.0f}/{w['max']:.0f} us; "
                      f"exec p50/p99/max {e['p50']:.0f}/{e['p99']:.0f}/{e['max']:.0f} us; overruns ours {o['ours']}, "
-                     f"late wake-up {o['late_wakeup']}, preempted {o['preempted']}, stall {o['stall']}")
+                     f"late wake-up {o['late_wakeup']}, preempted {o['preempted']}, stall {o['stall']}; "
+                     f"blocked cycles {t['blocked_cycles']}")
     ct = section["cyclictest"]["wake_us"]
     if ct is not None:
         lines.append(f"cyclictest: wake p50/p99/max {ct['p50']}/{ct['p99']}/{ct['max']} us")

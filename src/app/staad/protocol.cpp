@@ -331,6 +331,7 @@ void addThreadJson(Json& j, const rt::ActivityTiming& t, std::uint64_t count) {
   j["late_wakeups"] = t.counters.late_wakeups;
   j["preempted"] = t.counters.preempted;
   j["stalls"] = t.counters.stalls;
+  j["blocked_cycles"] = t.counters.blocked_cycles;
   // The longest cycle less its measured stall: the cycle's own work at its longest.
   j["own_execution_max_us"] = static_cast<double>(t.counters.max_own_execution) * 1e-3;
   j["skipped_periods"] = t.counters.skipped_periods;
@@ -452,6 +453,7 @@ nlohmann::json histogramsJson(std::span<const ThreadHistograms> threads) {
                                {"preempted", c.preempted},
                                {"stall", c.stalls}}},
                  {"own_execution_max_us", static_cast<double>(c.max_own_execution) * 1e-3},
+                 {"blocked_cycles", c.blocked_cycles},
                  {"realtime", t.activity->realtime()}};
   }
   return j;

@@ -63,7 +63,7 @@ struct ThreadHistograms {
 // The `histograms` object (docs/ARCHITECTURE.md section 6): per thread, period_us, cycles,
 // wake_us and exec_us {bins: [[us, count], ...] (non-empty 1 us bins), count, overflow,
 // bound_us, max_us}, overruns {total, ours, late_wakeup, preempted, stall},
-// own_execution_max_us, realtime. The bins are read from the threads' histograms (relaxed
+// own_execution_max_us, blocked_cycles, realtime. The bins are read from the threads' histograms (relaxed
 // atomics: a few samples behind at most, never torn); the threads never wait for it.
 nlohmann::json histogramsJson(std::span<const ThreadHistograms> threads);
 // One histogram: {bins: [[us, count], ...] (bin us holds [us, us + 1) us), count, overflow

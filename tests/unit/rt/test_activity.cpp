@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
@@ -172,6 +174,47 @@ TEST(PeriodicActivity, ARunnableIsSteppedInLockstepWithoutAnActivity) {
   recorder.stop(4 * kPeriod);
   EXPECT_EQ(recorder.steps, (std::vector<Nanos>{0, kPeriod, 2 * kPeriod, 3 * kPeriod}));
   EXPECT_EQ(recorder.stopped_on, std::this_thread::get_id());
+}
+
+// On the monotonic clock the activity counts the voluntary context switches of each body:
+// a body that sleeps blocks in every cycle, one that only computes never does.
+class Sleeper final : public Runnable {
+ public:
+  explicit Sleeper(bool sleeps) : sleeps_(sleeps) {}
+  void start(const PeriodicLoop&) override {}
+  void step(Nanos) override {
+    if (sleeps_) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    } else {
+      volatile std::uint64_t x = 0;
+      for (int i = 0; i < 10'000; ++i) x = x + static_cast<std::uint64_t>(i);
+    }
+    steps.fetch_add(1, std::memory_order_relaxed);
+  }
+  void stop(Nanos) override {}
+  std::atomic<int> steps{0};
+
+ private:
+  bool sleeps_;
+};
+
+TEST(PeriodicActivity, CountsTheCyclesWhoseBodyBlockedOnTheMonotonicClock) {
+  if (threadVoluntarySwitches() < 0) GTEST_SKIP() << "getrusage(RUSAGE_THREAD) is not available here";
+  for (const bool sleeps : {true, false}) {
+    MonotonicClock clock;
+    Sleeper body(sleeps);
+    PeriodicActivity activity(sleeps ? "sleeper" : "computer", body, clock, 2 * kMs);
+    activity.start(normalThread());
+    while (body.steps.load(std::memory_order_relaxed) < 20) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    activity.stop();
+    const PeriodicCounters c = activity.counters();
+    ASSERT_GE(c.cycles, 20u);
+    if (sleeps) {
+      EXPECT_EQ(c.blocked_cycles, c.cycles) << "every body slept";
+    } else {
+      EXPECT_EQ(c.blocked_cycles, 0u) << "no body of pure arithmetic may count as blocked";
+    }
+  }
 }
 
 TEST(PeriodicActivity, RefusesAPeriodThatIsNotPositive) {
