@@ -331,7 +331,8 @@ TEST_F(Staactl, HistogramsJsonPrintsTheHistogramsObject) {
   const std::string histograms =
       R"({"control":{"period_us":33333.3,"cycles":3,"wake_us":{"bins":[[12,2],[80,1]],"count":3,"overflow":0,)"
       R"("bound_us":100000,"max_us":80.5},"exec_us":{"bins":[[19100,3]],"count":3,"overflow":0,"bound_us":100000,)"
-      R"("max_us":19100.9},"overruns":{"total":1,"ours":0,"late_wakeup":0,"preempted":0,"stall":1}}})";
+      R"("max_us":19100.9},"overruns":{"total":1,"ours":0,"late_wakeup":0,"preempted":0,"stall":1},)"
+      R"("blocked_cycles":2}})";
   FakeStaad staad(socket_, {"{\"ok\":true,\"histograms\":" + histograms + "}\n"});
   const CtlRun r = ctl({"--socket", socket_.string(), "histograms", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -340,7 +341,7 @@ TEST_F(Staactl, HistogramsJsonPrintsTheHistogramsObject) {
   ASSERT_EQ(summary.exit_code, 0) << summary.err;
   EXPECT_EQ(summary.out,
             "control: 3 cycles; wake-up max 80 us, execution max 19101 us; overruns 0 ours, 0 late wake-ups, 0 preempted, "
-            "1 stalls\n");
+            "1 stalls; 2 cycles blocked\n");
   ASSERT_EQ(staad.requests().size(), 2u);
   EXPECT_EQ(staad.requests()[0], "{\"cmd\":\"histograms\"}\n");
 }

@@ -218,7 +218,8 @@ void printSummary(const Json& s) {
   std::cout << out.str() << std::flush;
 }
 
-// One line per thread: its cycles, the wake-up and execution maxima, the overruns by cause.
+// One line per thread: its cycles, the wake-up and execution maxima, the overruns by cause,
+// the cycles that blocked.
 void printHistograms(const Json& h) {
   std::ostringstream out;
   for (const auto& [name, t] : h.items()) {
@@ -226,7 +227,7 @@ void printHistograms(const Json& h) {
     out << name << ": " << num(t, "cycles", 0) << " cycles; wake-up max " << num(sub(t, "wake_us"), "max_us", 0)
         << " us, execution max " << num(sub(t, "exec_us"), "max_us", 0) << " us; overruns " << num(o, "ours", 0)
         << " ours, " << num(o, "late_wakeup", 0) << " late wake-ups, " << num(o, "preempted", 0) << " preempted, "
-        << num(o, "stall", 0) << " stalls\n";
+        << num(o, "stall", 0) << " stalls; " << num(t, "blocked_cycles", 0) << " cycles blocked\n";
   }
   std::cout << out.str() << std::flush;
 }
