@@ -147,29 +147,24 @@ TEST(StallAttribution, AFinishWithoutAStallNeverCountsOne) {
 // A body that blocked (a voluntary context switch: it slept, took a lock, waited for I/O) is
 // ours even when its gap looks like a stall and its CPU time like preemption.
 TEST(StallAttribution, ABodyThatBlockedIsOursNeverTheStallItsGapLooksLike) {
+  // 2 ms of work, then 36 ms off the CPU: a stall by its gap alone.
+  const auto play = [](Replay& r, std::int64_t switches) {
+    r.loop.wait();
+    r.probe.begin(r.clock.now());
+    r.clock.advance(2 * kNanosPerMilli);
+    r.probe.read(r.clock.now());
+    r.clock.advance(36 * kNanosPerMilli);
+    r.probe.read(r.clock.now());
+    r.probe.end(r.clock.now());
+    r.loop.finish(2 * kNanosPerMilli, r.probe.lastGap(), switches);
+  };
   Replay r;
-  r.clock.delayNextWake(0);
-  r.loop.wait();
-  r.probe.begin(r.clock.now());
-  r.clock.advance(2 * kNanosPerMilli);
-  r.probe.read(r.clock.now());
-  r.clock.advance(36 * kNanosPerMilli);  // 36 ms off the CPU: a stall, by its gap alone
-  r.probe.read(r.clock.now());
-  r.probe.end(r.clock.now());
-  r.loop.finish(2 * kNanosPerMilli, r.probe.lastGap(), 1);
+  play(r, 1);
   expectCounts(r.loop.counters(), 1, 0, 0, 0);
   EXPECT_EQ(r.loop.counters().blocked_cycles, 1u);
-
   // The same cycle without the switch: the platform's stall.
   Replay s;
-  s.loop.wait();
-  s.probe.begin(s.clock.now());
-  s.clock.advance(2 * kNanosPerMilli);
-  s.probe.read(s.clock.now());
-  s.clock.advance(36 * kNanosPerMilli);
-  s.probe.read(s.clock.now());
-  s.probe.end(s.clock.now());
-  s.loop.finish(2 * kNanosPerMilli, s.probe.lastGap(), 0);
+  play(s, 0);
   expectCounts(s.loop.counters(), 0, 0, 0, 1);
   EXPECT_EQ(s.loop.counters().blocked_cycles, 0u);
 
