@@ -38,6 +38,8 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   PolygonSet::Options opt;
   opt.cell_size = options_.grid_cell_m;
   static_.assign(polygons, opt);
+  horizon_.clear();
+  horizon_tests_ = 0;
   dynamic_.reserve(options_.max_dynamic_polygons, options_.max_dynamic_vertices);
   dynamic_.clear();
   static_discovered_.assign(static_.polygonCount(), 0);
@@ -599,7 +601,12 @@ std::size_t MinimalConstruct::edgeBlockers(std::int32_t v, bool use_dynamic) {
   // Nor after it failed on an edge the exact test found blocked, until the exact test finds
   // one free: the edges tested one after another are mostly the same way from nearby starts.
   const bool ask = oracle_ != nullptr && !at_static_corner && !oracle_missed_;
-  std::size_t nb = ask && oracle_(oracle_context_, u, node.pos) ? 0 : static_.segmentBlockers(u, node.pos, blockers_);
+  // The root's edges first ask its horizon: the oracle cannot vouch for them when the goal
+  // lies on the clearance grid's border (the intermediate goal always does).
+  const bool certified = !at_static_corner && node.parent == 0 && rootEdgeCertified(u, node.pos);
+  std::size_t nb = certified || (ask && oracle_(oracle_context_, u, node.pos))
+                       ? 0
+                       : static_.segmentBlockers(u, node.pos, blockers_);
   if (oracle_ != nullptr && !at_static_corner) oracle_missed_ = nb > 0;
   if (use_dynamic) {
     const std::size_t ns_poly = static_.polygonCount();
@@ -608,6 +615,19 @@ std::size_t MinimalConstruct::edgeBlockers(std::int32_t v, bool use_dynamic) {
     nb += nd;
   }
   return nb;
+}
+
+bool MinimalConstruct::rootEdgeCertified(const Vec2& u, const Vec2& p) {
+  if (!has_region_) return false;
+  if (!horizon_.builtFor(u)) {
+    if (u != horizon_root_) {
+      horizon_root_ = u;
+      horizon_tests_ = 0;
+    }
+    if (++horizon_tests_ < kHorizonAfter) return false;
+    horizon_.build(static_, u, region_);
+  }
+  return horizon_.certifiesFree(p);
 }
 
 void MinimalConstruct::blockedEdgeInto(std::int32_t v, std::size_t nb, bool use_dynamic, bool in_heap) {

@@ -26,6 +26,7 @@
 
 #include "path/deadline.hpp"
 #include "path/polygon_set.hpp"
+#include "path/root_horizon.hpp"
 #include "path/tangency_table.hpp"
 
 #include <cstdint>
@@ -107,6 +108,17 @@ class MinimalConstruct {
   // shared between searches over the same obstacles): the same answers, faster expansions.
   // Off (for the next setStaticObstacles): every expansion tests every node, as a reference.
   void setTangencyTable(bool on) { use_tangency_table_ = on; }
+  // Where the next queries' starts lie (the heuristic's: the local box, grown). The edges from
+  // the root (the goal) to starts in it first ask a table of the root's free directions
+  // (path/root_horizon.hpp), built once the root's edges have been tested kHorizonAfter times:
+  // for a tree asked from many nearby starts.
+  void setStartRegion(const Box& region) {
+    if (has_region_ && region.min == region_.min && region.max == region_.max) return;
+    region_ = region;
+    has_region_ = true;
+    horizon_.clear();
+    horizon_tests_ = 0;
+  }
 
   // Is a point free (outside every obstacle's interior) / is a segment free?
   bool pointFree(const Vec2& p, bool with_dynamic) const;
@@ -219,6 +231,15 @@ class MinimalConstruct {
   // corner's node in this search, or kNone) and the other nodes (other_nodes_: dynamic
   // corners; the goal and the start, nodes 0 and 1, are always visited).
   bool use_tangency_table_ = true;
+  RootHorizon horizon_;
+  Box region_;
+  bool has_region_ = false;
+  Vec2 horizon_root_{0.0, 0.0};        // the root whose edges horizon_tests_ counts
+  std::uint32_t horizon_tests_ = 0;
+  static constexpr std::uint32_t kHorizonAfter = 32;
+  // True when the horizon vouches that the static obstacles leave the edge from the root at u
+  // to p free (builds the table once the root's edges are asked about often enough).
+  bool rootEdgeCertified(const Vec2& u, const Vec2& p);
   std::shared_ptr<const TangencyTable> tangency_;
   std::vector<std::int32_t> corner_node_;
   std::vector<std::int32_t> other_nodes_;

@@ -30,6 +30,9 @@ bool parseHeuristicKind(const char* text, HeuristicKind& out) {
 
 namespace {
 
+// How far beyond the local box STAA*'s states may be asked about (the root horizon's region).
+constexpr double kRegionMargin = 1.0;
+
 // Eq. (4, 5) over a polyline whose segment i (from path[i - 1] to path[i]) has the length
 // and direction `segment(i, len, phi)` gives (phi only read for len >= 1e-9).
 template <typename Segment>
@@ -173,6 +176,16 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
   passage_active_ = use_passage_;
   staticSearch().setFreeSegmentOracle(oracle, this);
   for (std::size_t k = 0; k < 3; ++k) dynamicSearch(k).setFreeSegmentOracle(oracle, this);
+  // The states STAA* evaluates lie in the local box, or a little beyond it.
+  Box region{map.boxCorners()[0], map.boxCorners()[0]};
+  for (const Vec2& c : map.boxCorners()) {
+    region.min = region.min.cwiseMin(c);
+    region.max = region.max.cwiseMax(c);
+  }
+  region.min -= Vec2(kRegionMargin, kRegionMargin);
+  region.max += Vec2(kRegionMargin, kRegionMargin);
+  staticSearch().setStartRegion(region);
+  for (std::size_t k = 0; k < 3; ++k) dynamicSearch(k).setStartRegion(region);
   final_goal_ = map.intermediateGoal().is_final;
   const std::size_t n = std::min(obstacles.size(), views_.size());
   for (int k = 0; k < 3; ++k) {
