@@ -72,9 +72,9 @@ TEST(RootHorizon, EverySegmentItCertifiesIsFreeByTheExactTestOnRandomScenes) {
       all.free += t.free;
     }
   }
-  // Not a certificate that never says yes: most free segments are vouched for.
+  // Not a certificate that never says yes: most free segments are vouched for (93 % here).
   ASSERT_GT(all.free, 10000);
-  EXPECT_GT(all.certified, all.free / 2);
+  EXPECT_GT(all.certified, all.free * 8 / 10);
 }
 
 TEST(RootHorizon, VouchesForMostFreeEdgesFromGoalsInTheOffice) {
@@ -95,7 +95,7 @@ TEST(RootHorizon, VouchesForMostFreeEdgesFromGoalsInTheOffice) {
     all.free += t.free;
   }
   ASSERT_GT(all.free, 2000);
-  EXPECT_GT(all.certified, all.free * 8 / 10);
+  EXPECT_GT(all.certified, all.free * 9 / 10);
 }
 
 TEST(RootHorizon, SaysNothingOutsideItsRegionNorFromARootInsideAnObstacle) {
