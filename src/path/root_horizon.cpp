@@ -86,7 +86,7 @@ void RootHorizon::addEdge(const Vec2& c, const Vec2& d) {
   }
   for (std::size_t k = 0; k <= span + 4; ++k) {
     const std::size_t s = (from + kSectors - 2 + k) % kSectors;
-    // The edge's part within this sector and two on each side (a wedge under 2 degrees, so
+    // The edge's part within this sector and two on each side (a wedge of at most 2.3 degrees, so
     // no rounding of a direction or of the clip can leave out a point of the sector itself).
     const Vec2 lo = sectorStart(s + kSectors - 2), hi = sectorStart(s + 3);
     double t0 = 0.0, t1 = 1.0;

@@ -41,9 +41,6 @@ class RootHorizon {
   // polygon boundary (and so, the root being free, no interior). False says nothing.
   bool certifiesFree(const Vec2& p) const;
 
-  // The certified distance in the sector of direction d (for tests).
-  double boundAt(const Vec2& d) const { return bound_[sectorOf(d)]; }
-
  private:
   static std::size_t sectorOf(const Vec2& d);
   // The unit-free direction at the start of sector s (pseudo-angle s * 4 / kSectors).

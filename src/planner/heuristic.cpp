@@ -1,5 +1,6 @@
 #include "planner/heuristic.hpp"
 
+#include "geometry/polygon.hpp"
 #include "planner/distance_field.hpp"
 
 #include <algorithm>
@@ -177,11 +178,7 @@ void Heuristic::prepare(const Pose2& goal, const DynamicObstacleSet& obstacles, 
   staticSearch().setFreeSegmentOracle(oracle, this);
   for (std::size_t k = 0; k < 3; ++k) dynamicSearch(k).setFreeSegmentOracle(oracle, this);
   // The states STAA* evaluates lie in the local box, or a little beyond it.
-  Box region{map.boxCorners()[0], map.boxCorners()[0]};
-  for (const Vec2& c : map.boxCorners()) {
-    region.min = region.min.cwiseMin(c);
-    region.max = region.max.cwiseMax(c);
-  }
+  Box region = boundingBox(map.boxCorners());
   region.min -= Vec2(kRegionMargin, kRegionMargin);
   region.max += Vec2(kRegionMargin, kRegionMargin);
   staticSearch().setStartRegion(region);
