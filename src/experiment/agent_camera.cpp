@@ -46,6 +46,30 @@ hal::SimDepthConfig rendererConfig(const RobotProfile& profile, const DepthObsta
   return r;
 }
 
+static_assert(ScannerProfile::kMaxBeams == static_cast<int>(hal::LaserScan::kMaxBeams));
+
+hal::SimScanConfig scannerConfig(const RobotProfile& profile, std::uint64_t seed) {
+  if (!profile.has_scanner) {
+    throw std::invalid_argument("robot profile '" + profile.name +
+                                "' has no scanner section: --obstacles depth+scan needs one (config/robots/paper-agent.yaml "
+                                "shows the keys)");
+  }
+  const ScannerProfile& p = profile.scanner;
+  hal::SimScanConfig c;
+  c.mount = hal::ScanMount{p.x, p.y, p.z, p.yaw};
+  const double half = 0.5 * p.fov_deg * kPi / 180.0;
+  c.angle_min = -half;
+  // A full turn's last beam would repeat its first: one increment short of it.
+  c.angle_max = p.fov_deg >= 360.0 ? half - 2.0 * half / p.beams : half;
+  c.beams = p.beams;
+  c.range_min = p.min_range_m;
+  c.range_max = p.max_range_m;
+  c.noise_m = p.noise_m;
+  c.dropout = p.dropout;
+  c.seed = seed;
+  return c;
+}
+
 }  // namespace
 
 hal::CameraIntrinsics cameraIntrinsics(const DepthCameraProfile& c) {
@@ -80,7 +104,7 @@ DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile) {
 }
 
 AgentCamera::AgentCamera(const PolygonMap& map, const RobotProfile& profile, const DepthObstaclesConfig& perception,
-                         std::uint64_t seed)
+                         std::uint64_t seed, bool with_scanner)
     : camera_(cameraOf(profile)),
       renderer_(map, rendererConfig(profile, perception, seed)),
       detector_(map, cameraIntrinsics(camera_), cameraMount(camera_), perception),
@@ -90,6 +114,14 @@ AgentCamera::AgentCamera(const PolygonMap& map, const RobotProfile& profile, con
       period_s_(1.0 / camera_.rate_hz),
       latency_s_(camera_.latency_s),
       loss_rng_(seed ^ 0x9E3779B97F4A7C15ULL) {
+  if (with_scanner) {
+    // Its own noise stream, apart from the camera's and the frame losses'.
+    const hal::SimScanConfig config = scannerConfig(profile, seed ^ 0xD1B54A32D192ED03ULL);
+    scanner_ = std::make_unique<hal::ScanRenderer>(map, config);
+    scan_ = std::make_unique<hal::LaserScan>();
+    scan_mount_ = config.mount;
+    scan_half_fov_ = 0.5 * profile.scanner.fov_deg * kPi / 180.0;
+  }
   if (latency_s_ > period_s_ * (kRing - 1)) {
     throw std::invalid_argument("robot profile '" + profile.name + "': camera.latency_s " +
                                 std::to_string(latency_s_) + " is more than " + std::to_string(kRing - 1) +
@@ -122,13 +154,23 @@ bool AgentCamera::perceive(double time_s, const Pose2& robot, std::span<const ha
   image_->stamp = static_cast<rt::Nanos>(std::llround(time_s * 1e9));
   image_->sequence = ++sequence_;
   newest_ = taken_ == 0 ? 0 : (newest_ + 1) % kRing;
+  ScanInput scan;
+  if (scanner_) {
+    t0 = std::chrono::steady_clock::now();
+    scanner_->render(robot, others, *scan_);  // from the base: the scanner does not pan
+    render_us_ += elapsedUs(t0);
+    scan_->stamp = image_->stamp;
+    scan_->sequence = image_->sequence;
+    scan = ScanInput{scan_.get(), scan_mount_, robot};
+  }
   t0 = std::chrono::steady_clock::now();
-  stats_ = detector_.process(*image_, view, ring_[newest_]);
+  stats_ = detector_.process(*image_, view, ring_[newest_], scan);
   perception_us_ = elapsedUs(t0);
   ring_time_[newest_] = time_s;
   ++taken_;
   ++frames_;
   view_.look(time_s, view.theta + camera_.yaw, 0.5 * camera_.fov_h_deg * kPi / 180.0);
+  if (scanner_) view_.look(time_s, robot.theta + scan_mount_.yaw, scan_half_fov_);
   return true;
 }
 

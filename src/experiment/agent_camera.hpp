@@ -19,7 +19,12 @@
 //     A pan is a turn of the camera about that axis, so a panned frame is rendered and
 //     perceived as the fixed mount on a base turned by the pan (the same rays, exactly the
 //     same frame; staad's frames with their own mount rebuild the rays instead).
-//   - what the camera has looked at lately (ViewMemory) limits the robot's speed: faster than
+//   - with a scanner (staa-sim --obstacles depth+scan; the profile's `scanner`: the HSR's base
+//     laser), a planar scan rendered from the base (not the head) with each camera frame, its
+//     returns perceived in the same grid (ScanInput): one cluster and one track whatever saw a
+//     body. The scanner's own rate (the UST-20LX's 40 Hz) is not modelled: it scans when the
+//     camera's frame is taken, and a lost frame loses its scan too;
+//   - what the camera (and scanner) looked at lately (ViewMemory) limits the robot's speed: faster than
 //     kBlindSpeedMps only towards where the command's arc goes that the camera has seen within
 //     kViewMemoryS (limitSpeed; the controller's command is limited after the cycle, the head
 //     turns to where the controller wants to go, and the speed follows it there).
@@ -38,6 +43,7 @@
 #include "perception/view_memory.hpp"
 #include "robot/robot_profile.hpp"
 #include "world/sim_depth_camera.hpp"
+#include "world/sim_laser_scan.hpp"
 
 #include <cstdint>
 #include <memory>
@@ -59,9 +65,10 @@ DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile);
 
 class AgentCamera {
  public:
-  // Throws std::invalid_argument when the profile has no camera or a value is out of range.
+  // Throws std::invalid_argument when the profile has no camera (or, with_scanner, no scanner)
+  // or a value is out of range.
   AgentCamera(const PolygonMap& map, const RobotProfile& profile, const DepthObstaclesConfig& perception,
-              std::uint64_t seed);
+              std::uint64_t seed, bool with_scanner = false);
 
   // The camera's frame due at `time_s` (none when not due yet, or lost): rendered from the
   // base at `robot` with the head at its pan among `others` (prisms of the other bodies),
@@ -74,6 +81,8 @@ class AgentCamera {
   const hal::ObstacleFrame* delivered(double time_s) const;
   // The last depth image rendered (only the pixels perception samples are set).
   const hal::DepthFrame& image() const { return *image_; }
+  // The last scan (null without a scanner).
+  const hal::LaserScan* scan() const { return scan_.get(); }
   // The last frame perceived (not delayed), and its exposure time.
   const hal::ObstacleFrame& frame() const { return ring_[newest_]; }
   double frameTime() const { return ring_time_[newest_]; }
@@ -111,6 +120,10 @@ class AgentCamera {
   hal::DepthRenderer renderer_;
   DepthObstacleDetector detector_;
   std::unique_ptr<hal::DepthFrame> image_;
+  std::unique_ptr<hal::ScanRenderer> scanner_;  // with_scanner only
+  std::unique_ptr<hal::LaserScan> scan_;
+  hal::ScanMount scan_mount_;
+  double scan_half_fov_ = 0.0;
   std::vector<hal::ObstacleFrame> ring_;
   std::vector<double> ring_time_;
   std::size_t newest_ = 0;

@@ -78,6 +78,17 @@ Json cameraJson(const RobotProfile& robot) {
   return j;
 }
 
+Json scannerJson(const ScannerProfile& c) {
+  Json j;
+  j["mount"] = Json{{"x", c.x}, {"y", c.y}, {"z", c.z}, {"yaw", c.yaw}};
+  j["fov_deg"] = c.fov_deg;
+  j["beams"] = c.beams;
+  j["range_m"] = Json::array({c.min_range_m, c.max_range_m});
+  j["noise_m"] = c.noise_m;
+  j["dropout"] = c.dropout;
+  return j;
+}
+
 Json perceptionConfigJson(const DepthObstaclesConfig& p) {
   Json j;
   j["pixel_stride"] = p.pixel_stride;
@@ -154,7 +165,12 @@ void validateExperimentSpec(const ExperimentSpec& spec) {
   if (spec.agents.empty()) fail("no agent counts");
   if (spec.heuristics.empty()) fail("no heuristics");
   if (spec.obstacles.empty()) fail("no obstacle sources");
-  if (std::find(spec.obstacles.begin(), spec.obstacles.end(), ObstacleSource::kDepth) != spec.obstacles.end()) {
+  const bool any_perceived = std::any_of(spec.obstacles.begin(), spec.obstacles.end(), perceived);
+  if (std::find(spec.obstacles.begin(), spec.obstacles.end(), ObstacleSource::kDepthScan) != spec.obstacles.end() &&
+      !spec.robot.has_scanner) {
+    fail("obstacles 'depth+scan' needs a robot profile with a scanner ('" + spec.robot.name + "' has none)");
+  }
+  if (any_perceived) {
     if (!spec.robot.has_camera) fail("obstacles 'depth' needs a robot profile with a camera ('" + spec.robot.name + "' has none)");
     try {
       (void)agentPerceptionConfig(spec.robot);
@@ -414,9 +430,12 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   s["agents"] = spec.agents;
   s["obstacles"] = Json::array();
   for (const ObstacleSource o : spec.obstacles) s["obstacles"].push_back(toString(o));
-  if (std::find(spec.obstacles.begin(), spec.obstacles.end(), ObstacleSource::kDepth) != spec.obstacles.end()) {
+  if (std::any_of(spec.obstacles.begin(), spec.obstacles.end(), perceived)) {
     s["camera"] = cameraJson(spec.robot);
     s["perception"] = perceptionConfigJson(spec.perception.value_or(agentPerceptionConfig(spec.robot)));
+  }
+  if (std::find(spec.obstacles.begin(), spec.obstacles.end(), ObstacleSource::kDepthScan) != spec.obstacles.end()) {
+    s["scanner"] = scannerJson(spec.robot.scanner);
   }
   s["runs"] = spec.runs;
   s["duration_s"] = spec.duration_s;

@@ -211,7 +211,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   config.staa.heuristic.stop_at_goal = false;
 
   MultiWorld world(map, robot);
-  const bool by_camera = options.obstacles == ObstacleSource::kDepth;
+  const bool by_camera = perceived(options.obstacles);
   const DepthObstaclesConfig perception =
       by_camera ? options.perception.value_or(agentPerceptionConfig(robot)) : DepthObstaclesConfig{};
   std::vector<std::unique_ptr<SimAgent>> agents;
@@ -231,8 +231,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       a->controller = std::make_unique<DwaController>(robot, config.local);
     }
     a->cycle->setLocalController(a->controller.get());
-    if (options.obstacles == ObstacleSource::kDepth && a->perceives) {
-      a->camera = std::make_unique<AgentCamera>(map, robot, perception, streamSeed(options.seed, kCameraStream + i));
+    if (by_camera && a->perceives) {
+      a->camera = std::make_unique<AgentCamera>(map, robot, perception, streamSeed(options.seed, kCameraStream + i),
+                                                options.obstacles == ObstacleSource::kDepthScan);
     }
     agents.push_back(std::move(a));
   }

@@ -42,13 +42,14 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   std::vector<Vec2> seen_velocities(hal::ObstacleFrame::kMaxObstacles);
   std::vector<double> seen_turn_rates(hal::ObstacleFrame::kMaxObstacles);
   std::size_t seen = 0;  // obstacles in the seen_ spans this cycle
-  if (options.obstacles == ObstacleSource::kDepth) {
+  if (perceived(options.obstacles)) {
     DepthObstaclesConfig perception = agentPerceptionConfig(scenario.robot);
     double fastest = 0.0;
     for (std::size_t i = 0; i < world.moverCount(); ++i) fastest = std::max(fastest, world.mover(i).speed);
     perception.max_speed_mps = std::max(perception.max_speed_mps, 1.25 * fastest);
     perception.acceleration_mps2 = std::max(perception.acceleration_mps2, 1.0);
-    camera = std::make_unique<AgentCamera>(scenario.map, scenario.robot, perception, 1);
+    camera = std::make_unique<AgentCamera>(scenario.map, scenario.robot, perception, 1,
+                                           options.obstacles == ObstacleSource::kDepthScan);
   }
   std::unique_ptr<record::SimRecording> recording;
   if (!options.record_path.empty()) {

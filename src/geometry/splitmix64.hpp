@@ -24,6 +24,18 @@ class SplitMix64 {
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
   // Uniform in [a, b).
   double uniform(double a, double b) { return a + (b - a) * uniform(); }
+  // A standard normal sample from one draw: four 16-bit uniforms summed (Irwin-Hall),
+  // centred and scaled to unit variance. Its tails end at +-3.5 sigma, which a sensor's noise
+  // model does not miss.
+  double normal() {
+    std::uint64_t bits = next();
+    double sum = 0.0;
+    for (int i = 0; i < 4; ++i) {
+      sum += static_cast<double>(bits & 0xFFFF) * (1.0 / 65536.0);
+      bits >>= 16;
+    }
+    return (sum - 2.0) * 1.7320508075688772;  // var of the sum is 4/12
+  }
 
  private:
   std::uint64_t state_;

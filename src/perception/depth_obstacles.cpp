@@ -131,7 +131,7 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
     r->rays.reserve(sampled);
     r->edge.reserve(edge_rays);
   }
-  edge_cells_.reserve(edge_rays);
+  edge_cells_.reserve(edge_rays + 4);  // and a scan's two ends, two beams each
   fillRays(camera_.rotation(), camera_.position(), rays_);
   // The grid reaches max_range_m from the camera wherever the camera sits on the robot
   // (within kMaxGridSide: validated above).
@@ -212,6 +212,11 @@ void DepthObstacleDetector::resetTracks() {
 
 DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame, const Pose2& robot,
                                                    hal::ObstacleFrame& out) {
+  return process(frame, robot, out, ScanInput{});
+}
+
+DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame, const Pose2& robot,
+                                                   hal::ObstacleFrame& out, const ScanInput& scan) {
   DepthObstaclesStats stats;
   out.stamp = frame.stamp;
   out.sequence = frame.sequence;
@@ -228,13 +233,84 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
     backProject(frame, rays_, camera_.position(), robot, stats);
   }
   robot_ = robot.position();
+  scan_ = nullptr;
+  if (scan.scan != nullptr) addScan(scan, stats);
   findClusters(robot, stats);
   outlineClusters(out);
   trackClusters(frame.stamp, out);
   out.dropped = stats.clusters - kept_;
   keepUnseenTracks(frame, robot, out);
   for (const Track& t : tracks_) stats.tracks += t.live ? 1 : 0;
+  scan_ = nullptr;
   return stats;
+}
+
+// Step 1b: the scan's returns into the same cells, each weighing min_points_per_cell points.
+void DepthObstacleDetector::addScan(const ScanInput& in, DepthObstaclesStats& stats) {
+  const hal::LaserScan& scan = *in.scan;
+  // Cheap guards for a scan that skipped hal::scanProblem: nothing is read past its beams.
+  if (scan.count < 2 || scan.count > hal::LaserScan::kMaxBeams || !std::isfinite(scan.angle_min) ||
+      !std::isfinite(scan.angle_increment) || scan.angle_increment == 0.0 || !std::isfinite(scan.range_max) ||
+      !(scan.range_min >= 0.0) || !std::isfinite(in.robot.x) || !std::isfinite(in.robot.y) ||
+      !std::isfinite(in.robot.theta)) {
+    return;
+  }
+  scan_ = &scan;
+  scan_sensor_ = in.robot.transform(Vec2(in.mount.x, in.mount.y));
+  scan_zero_ = in.robot.theta + in.mount.yaw + scan.angle_min;
+  const double inv_cell = 1.0 / config_.cell_m;
+  const double ax = (scan_sensor_.x() - origin_.x()) * inv_cell, ay = (scan_sensor_.y() - origin_.y()) * inv_cell;
+  const double n = n_;
+  const auto weight = static_cast<std::uint16_t>(config_.min_points_per_cell);
+  // The beams' directions by a rotation per beam (two products, no sin or cos per beam).
+  const double ci = std::cos(scan.angle_increment), si = std::sin(scan.angle_increment);
+  double dx = std::cos(scan_zero_) * inv_cell, dy = std::sin(scan_zero_) * inv_cell;
+  const bool full_turn = std::abs(scan.angle_increment) * static_cast<double>(scan.count) >= 2.0 * kPi - 1e-6;
+  std::size_t points = 0;
+  for (std::size_t i = 0; i < scan.count; ++i) {
+    const double r = scan.ranges[i];
+    const double x = dx, y = dy;
+    dx = ci * x - si * y;
+    dy = si * x + ci * y;
+    if (!(r >= scan.range_min && r <= scan.range_max)) continue;
+    const double gx = ax + r * x, gy = ay + r * y;
+    if (!(gx >= 0.0 && gx < n && gy >= 0.0 && gy < n)) continue;
+    const std::size_t k = static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) + static_cast<std::size_t>(gx);
+    if (count_[k] > std::numeric_limits<std::uint16_t>::max() - weight) continue;
+    count_[k] = static_cast<std::uint16_t>(count_[k] + weight);
+    sum_x_[k] += static_cast<float>(weight * gx);
+    sum_y_[k] += static_cast<float>(weight * gy);
+    ++points;
+    // The sweep's two ends cut a body off as the image's sides do.
+    if (!full_turn && (i < 2 || i + 2 >= scan.count) && edge_[k] == 0 && edge_cells_.size() < edge_cells_.capacity()) {
+      edge_[k] = 1;
+      edge_cells_.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  stats.scan_points = points;
+  stats.points += points;
+}
+
+bool DepthObstacleDetector::scanSees(const Vec2& p) const {
+  if (scan_ == nullptr) return false;
+  constexpr double kRangeMargin = 0.3;  // m, as inView's
+  constexpr double kEdgeBeams = 4.0;    // a place this near the sweep's ends may be seen or not
+  const hal::LaserScan& scan = *scan_;
+  const Vec2 d = p - scan_sensor_;
+  const double distance = d.norm();
+  if (distance < scan.range_min + kRangeMargin ||
+      distance > std::min(scan.range_max, config_.max_range_m) - kRangeMargin) {
+    return false;
+  }
+  // The bearing from beam 0, wrapped to the sweep's side of it.
+  double bearing = std::atan2(d.y(), d.x()) - scan_zero_;
+  bearing -= 2.0 * kPi * std::floor(bearing / (2.0 * kPi));  // [0, 2 pi)
+  if (scan.angle_increment < 0.0 && bearing > 0.0) bearing -= 2.0 * kPi;
+  const double beam = bearing / scan.angle_increment;
+  if (beam < kEdgeBeams || beam > static_cast<double>(scan.count - 1) - kEdgeBeams) return false;
+  const double r = scan.ranges[static_cast<std::size_t>(std::lround(beam))];
+  // A return nearer than the place by more than the gate: something in front hides it.
+  return !(r >= scan.range_min && r <= scan.range_max && r < distance - config_.gate_m);
 }
 
 // Step 1: pixels -> points in the band -> counts (and point sums) per grid cell.
@@ -533,6 +609,7 @@ double DepthObstacleDetector::growth(const Track& track, double t) const {
 }
 
 bool DepthObstacleDetector::inView(const hal::DepthFrame& frame, const Pose2& robot, const Vec2& p) const {
+  if (scanSees(p)) return true;
   // Margins: a place this near an end of the range or an edge of the image may be seen or not.
   constexpr double kRangeMargin = 0.3;  // m
   constexpr double kEdgePixels = 8.0;

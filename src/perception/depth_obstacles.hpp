@@ -32,6 +32,7 @@
 
 #include "geometry/types.hpp"
 #include "hal/depth_camera.hpp"
+#include "hal/laser_scan.hpp"
 #include "hal/obstacles.hpp"
 #include "map/polygon_map.hpp"
 #include "hal/camera_model.hpp"
@@ -137,9 +138,21 @@ struct DepthObstaclesConfig {
 void validateDepthObstaclesConfig(const DepthObstaclesConfig& config, double camera_offset_m = 0.0);
 inline double cameraOffset(const hal::CameraMount& mount) { return std::hypot(mount.x, mount.y); }
 
+// A planar scan perceived with a depth frame (the HSR's base scanner beside its head camera):
+// its returns join the frame's points in the same grid, so one cluster, one outline and one
+// track come from whatever saw a body. A return weighs as much as min_points_per_cell camera
+// points (a laser return is a surface, not a speckle of depth noise): one occupies its cell.
+// The scan is also asked whether a track should have been seen (keepUnseenTracks).
+struct ScanInput {
+  const hal::LaserScan* scan = nullptr;  // none: the frame alone
+  hal::ScanMount mount;
+  Pose2 robot;  // the base when the scan was taken (map frame)
+};
+
 // What one frame produced (for telemetry and tests).
 struct DepthObstaclesStats {
   std::size_t points = 0;          // points in the height band and range, inside the grid
+  std::size_t scan_points = 0;     // ... of them the scan's returns
   std::size_t occupied_cells = 0;  // cells with >= min_points_per_cell points
   std::size_t map_cells = 0;       // ... of which the static map explains
   std::size_t clusters = 0;        // clusters with >= min_cluster_points (before the cut)
@@ -166,6 +179,11 @@ class DepthObstacleDetector {
   // must pass validateCamera (hal/ros drops those that do not); one that is not finite or
   // not above the floor is seen as no points.
   DepthObstaclesStats process(const hal::DepthFrame& frame, const Pose2& robot, hal::ObstacleFrame& out);
+  // The same with a scan's returns in the grid beside the frame's points (ScanInput). The scan
+  // must pass hal::scanProblem (hal/ros drops those that do not); its returns farther from the
+  // base than the grid reaches (max_range_m) are not used.
+  DepthObstaclesStats process(const hal::DepthFrame& frame, const Pose2& robot, hal::ObstacleFrame& out,
+                              const ScanInput& scan);
 
   // Forgets every track (after a relocalisation, say): the next frame's velocities are 0.
   void resetTracks();
@@ -218,6 +236,10 @@ class DepthObstacleDetector {
   void useFrameMount(const hal::CameraMount& mount);
   void backProject(const hal::DepthFrame& frame, const Rays& rays, const Vec3& camera_position, const Pose2& robot,
                    DepthObstaclesStats& stats);
+  void addScan(const ScanInput& scan, DepthObstaclesStats& stats);
+  // Whether this frame's scan should have seen something at `p` (map frame): in its sweep and
+  // range, and its beam there not stopped by something nearer.
+  bool scanSees(const Vec2& p) const;
   void findClusters(const Pose2& robot, DepthObstaclesStats& stats);
   void outlineClusters(hal::ObstacleFrame& out);
   void trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out);
@@ -261,6 +283,11 @@ class DepthObstacleDetector {
   Vec3 frame_camera_{0.0, 0.0, 0.0};
   Vec2 camera_map_{0.0, 0.0};
   Vec2 robot_{0.0, 0.0};  // this frame's base centre (map frame)
+  // This frame's scan (null: none; only during process), its sensor (map frame) and the
+  // map-frame bearing of its beam 0.
+  const hal::LaserScan* scan_ = nullptr;
+  Vec2 scan_sensor_{0.0, 0.0};
+  double scan_zero_ = 0.0;
   std::array<Cluster, kMaxClusters> clusters_{};
   std::size_t cluster_count_ = 0;
   std::array<std::uint16_t, kMaxClusters> order_{};

@@ -90,6 +90,33 @@ DepthCameraProfile readCamera(const io::ConfigValue& node) {
   return c;
 }
 
+ScannerProfile readScanner(const io::ConfigValue& node) {
+  node.mapping({"mount", "fov_deg", "beams", "range_m", "noise_m", "dropout"});
+  ScannerProfile c;
+  const io::ConfigValue m = node.required("mount", "{x, y, z, yaw}: the scanner on the base");
+  m.mapping({"x", "y", "z", "yaw"});
+  const io::Range offset = io::Range::closed(-DepthCameraProfile::kMaxMountOffsetM, DepthCameraProfile::kMaxMountOffsetM,
+                                             "m", "on the base");
+  c.x = optionalNumber(m, "x", 0.0, offset);
+  c.y = optionalNumber(m, "y", 0.0, offset);
+  c.z = m.required("z", "the scan plane's height above the floor").number(io::Range::above(0.0, "m", "above the floor"));
+  c.yaw = optionalNumber(m, "yaw", 0.0, io::Range::closed(-kPi, kPi, "rad"));
+  c.fov_deg = optionalNumber(node, "fov_deg", c.fov_deg, io::Range::closed(1.0, 360.0, "degrees"));
+  const io::ConfigValue beams = node.get("beams");
+  if (beams.present()) {
+    c.beams = static_cast<int>(beams.integer(2, ScannerProfile::kMaxBeams, "beams over the sweep"));
+  }
+  const io::ConfigValue range = node.get("range_m");
+  if (range.present()) {
+    range.numbers<2>("[min, max] range in metres");
+    c.min_range_m = range[0].number(io::Range::atLeast(0.0, "m"));
+    c.max_range_m = range[1].number(io::Range::leftOpen(c.min_range_m, 100.0, "m", "above min"));
+  }
+  c.noise_m = optionalNumber(node, "noise_m", c.noise_m, io::Range::closed(0.0, 1.0, "m"));
+  c.dropout = optionalNumber(node, "dropout", c.dropout, io::Range::rightOpen(0.0, 1.0, {}, "a fraction of the beams"));
+  return c;
+}
+
 }  // namespace
 
 double RobotProfile::circumradius() const {
@@ -104,7 +131,7 @@ double RobotProfile::inscribedRadius() const { return distanceToEdges(Vec2::Zero
 RobotProfile parseRobotProfile(const std::string& yaml_text, const std::string& source) {
   return io::readAs<ProfileError>(source, [&] {
     const io::ConfigDocument doc = io::ConfigDocument::parse(yaml_text, source);
-    const io::ConfigValue& root = doc.root(kFormat, {"format", "name", "footprint", "limits", "height", "camera"});
+    const io::ConfigValue& root = doc.root(kFormat, {"format", "name", "footprint", "limits", "height", "camera", "scanner"});
     RobotProfile profile;
     const io::ConfigValue name = root.get("name");
     profile.name = name.present() ? name.string("a string") : std::filesystem::path(source).stem().string();
@@ -115,6 +142,11 @@ RobotProfile parseRobotProfile(const std::string& yaml_text, const std::string& 
     if (camera.present()) {
       profile.camera = readCamera(camera);
       profile.has_camera = true;
+    }
+    const io::ConfigValue scanner = root.get("scanner");
+    if (scanner.present()) {
+      profile.scanner = readScanner(scanner);
+      profile.has_scanner = true;
     }
     return profile;
   });
@@ -160,6 +192,10 @@ RobotProfile paperAgentProfile() {
   p.height_m = 1.0;
   p.has_camera = true;
   p.camera = paperAgentCamera();
+  // And a scanner in the base like the HSR's (config/robots/paper-agent.yaml).
+  p.has_scanner = true;
+  p.scanner.z = 0.2;
+  p.scanner.dropout = 0.01;
   return p;
 }
 

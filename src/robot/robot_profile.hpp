@@ -58,6 +58,21 @@ struct DepthCameraProfile {
   double scan = 0.0;
 };
 
+// A planar laser scanner in the base (staa-sim --obstacles depth+scan scans with it beside the
+// camera): the HSR-B has one in its base (`/hsrb/base_scan`). Plain values, as the camera's.
+struct ScannerProfile {
+  // Mount in the base frame: position (m), the scan plane's height (m), the yaw (rad) of the
+  // middle of its sweep.
+  double x = 0.0, y = 0.0, z = 0.2, yaw = 0.0;
+  // The sweep (degrees, centred on the yaw) and its beams, both ends included.
+  double fov_deg = 270.0;
+  int beams = 1081;
+  static constexpr int kMaxBeams = 2048;  // hal::LaserScan::kMaxBeams (static_assert in agent_camera.cpp)
+  double min_range_m = 0.05, max_range_m = 20.0;
+  double noise_m = 0.01;  // range noise, standard deviation
+  double dropout = 0.0;   // fraction of the beams with no return
+};
+
 struct RobotProfile {
   std::string name;
   Polygon footprint;  // robot frame, metres, counter-clockwise after loading
@@ -69,6 +84,8 @@ struct RobotProfile {
   double height_m = 1.0;
   bool has_camera = false;  // the profile has a `camera` section
   DepthCameraProfile camera;
+  bool has_scanner = false;  // the profile has a `scanner` section
+  ScannerProfile scanner;
 
   // Radius of the smallest circle about the robot's origin that holds the footprint: the
   // least inflation of the map for the global path.

@@ -47,19 +47,6 @@ double originDistance(const Vec2& a, const Vec2& e) {
   return (a + t * e).norm();
 }
 
-// A standard normal sample from one 64-bit draw: four 16-bit uniforms summed (Irwin-Hall),
-// centred and scaled to unit variance. Its tails end at +-3.5 sigma, which a depth sensor's
-// noise model does not miss.
-double normalSample(SplitMix64& rng) {
-  std::uint64_t bits = rng.next();
-  double sum = 0.0;
-  for (int i = 0; i < 4; ++i) {
-    sum += static_cast<double>(bits & 0xFFFF) * (1.0 / 65536.0);
-    bits >>= 16;
-  }
-  return (sum - 2.0) * 1.7320508075688772;  // var of the sum is 4/12
-}
-
 }  // namespace
 
 DepthRenderer::DepthRenderer(const PolygonMap& map, const SimDepthConfig& config)
@@ -311,7 +298,7 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
       if (hit && best >= config_.min_depth_m && hit_cos * ray.inv_norm >= min_cos &&
           !(dropout > 0.0 && rng_.uniform() < dropout)) {
         double d = best;
-        if (noise > 0.0) d += noise * best * best * normalSample(rng_);
+        if (noise > 0.0) d += noise * best * best * rng_.normal();
         mm = static_cast<std::uint16_t>(std::clamp(std::round(d * 1000.0), 1.0, kMaxDepthMm));
         if (count_movers && hit_prism != kNoMover && prism_mover_[hit_prism] != kNoMover) {
           ++mover_pixels[prism_mover_[hit_prism]];

@@ -147,7 +147,7 @@ Json resultJson(const Request& rq, const staa::SimResult& r) {
   j["budget"] = staa::budgetJson(o.budget);
   j["heuristic"] = staa::toString(rq.heuristic);
   j["obstacles"] = staa::toString(o.obstacles);
-  if (o.obstacles == staa::ObstacleSource::kDepth) {
+  if (staa::perceived(o.obstacles)) {
     j["camera_frames"] = r.camera_frames;
     j["camera_frames_lost"] = r.camera_frames_lost;
   }
@@ -799,11 +799,18 @@ void loadMapRun(Request& rq, const Args& a) {
   checkGoal(sc, "--goal");
 }
 
-// --obstacles depth renders the frames of the profile's camera: a profile without one is bad input.
+// --obstacles depth renders the frames of the profile's camera (depth+scan its scanner's scans
+// too): a profile without one is bad input.
 void requireCamera(const Args& a, const staa::RobotProfile& robot) {
-  if (a.obstacles != staa::ObstacleSource::kDepth || robot.has_camera) return;
-  throw InputError("--obstacles depth: the robot profile '" + (a.robot_file.empty() ? robot.name : a.robot_file) +
-                   "' has no camera section (config/robots/paper-agent.yaml shows one)");
+  const std::string profile = a.robot_file.empty() ? robot.name : a.robot_file;
+  if (staa::perceived(a.obstacles) && !robot.has_camera) {
+    throw InputError(std::string("--obstacles ") + staa::toString(a.obstacles) + ": the robot profile '" + profile +
+                     "' has no camera section (config/robots/paper-agent.yaml shows one)");
+  }
+  if (a.obstacles == staa::ObstacleSource::kDepthScan && !robot.has_scanner) {
+    throw InputError("--obstacles depth+scan: the robot profile '" + profile +
+                     "' has no scanner section (config/robots/paper-agent.yaml shows one)");
+  }
 }
 
 Request singleRequest(const Args& a) {
