@@ -235,6 +235,43 @@ TEST(MultiSim, ADepthContactSaysWhenTheCameraFirstSawTheOther) {
   EXPECT_FALSE(contactsJson(t.contacts)[0].contains("perceived"));
 }
 
+// The same corridor, the observed agent standing across it (facing the north wall) where the
+// ghost will pass: the ghost comes from the west, beside it. The head camera, panning towards
+// the agent's path, sees the ghost late or never; the base scanner (--obstacles depth+scan),
+// which sweeps 135 degrees to either side, sees it from the far end of its grid.
+TEST(MultiSim, TheBaseScannerSeesAGhostComingFromTheSide) {
+  const PolygonMap corridor =
+      openMap(14.0, 3.0, {rect(0.0, 0.0, 14.0, 0.7), rect(0.0, 2.3, 14.0, 3.0), rect(7.0, 0.7, 14.0, 2.3)});
+  MultiSimOptions o = scripted(SimMode::kGhost, 6.0, 300, {Pose2{6.0, 1.5, 0.5 * kPi}, Pose2{1.0, 1.5, 0.0}},
+                               {{Vec2(6.0, 1.5)}, {Vec2(6.4, 1.5)}});
+  o.obstacles = ObstacleSource::kDepth;
+  const MultiSimResult camera = runMultiAgent(corridor, paperAgentProfile(), o);
+  o.obstacles = ObstacleSource::kDepthScan;
+  const MultiSimResult scan = runMultiAgent(corridor, paperAgentProfile(), o);
+  ASSERT_EQ(scan.contacts.size(), 1u);
+  const ContactRecord& c = scan.contacts[0];
+  ASSERT_TRUE(c.perceived);
+  ASSERT_TRUE(c.sighting.seen);
+  // Seen 4 m or more off (the grid reaches 4.5 m from the base), over 1.5 s before the ghost
+  // (1 to 2 m/s) arrived.
+  EXPECT_GT(c.sighting.seen_at_m, 3.5);
+  EXPECT_GT(c.sighting.seen_before_s, 1.5);
+  ASSERT_EQ(camera.contacts.size(), 1u);
+  ASSERT_TRUE(camera.contacts[0].perceived);
+  if (camera.contacts[0].sighting.seen) {
+    EXPECT_LT(camera.contacts[0].sighting.seen_before_s, c.sighting.seen_before_s - 0.5);
+  }
+  // The runs' perception figures: the scanner missed fewer of the others within 2 m.
+  ASSERT_TRUE(scan.perception && camera.perception);
+  std::printf("ghost from the side: depth+scan saw it %.2f s before at %.2f m, %llu near frames missed; the camera "
+              "alone %s, %llu missed\n",
+              c.sighting.seen_before_s, c.sighting.seen_at_m, static_cast<unsigned long long>(scan.perception->near_missed),
+              camera.contacts[0].sighting.seen ? ("saw it " + std::to_string(camera.contacts[0].sighting.seen_before_s) + " s before").c_str()
+                                               : "never saw it",
+              static_cast<unsigned long long>(camera.perception->near_missed));
+  EXPECT_LT(scan.perception->near_missed, camera.perception->near_missed);
+}
+
 TEST(MultiWorld, TwoAgentsPlacedTouchingCountOneEpisodeEachAndCanBackAway) {
   MultiWorld world(openMap(10.0, 10.0), paperAgentProfile());
   // Nose to nose: both fronts on x = 5 (the footprint reaches 0.4 m ahead).

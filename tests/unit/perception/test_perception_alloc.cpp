@@ -5,6 +5,7 @@
 #include "rt/alloc_count.hpp"
 #include "rt/clock.hpp"
 #include "world/sim_depth_camera.hpp"
+#include "world/sim_laser_scan.hpp"
 #include "depth_scenes.hpp"
 #include "world/world.hpp"
 
@@ -170,6 +171,62 @@ TEST(PerceptionAlloc, AMountChangingEveryFrameAllocatesNothingAndItsCostIsPrinte
   std::printf("perception, pixel_stride 4, per-frame mount: CPU p50 %.0f us, p99 %.0f us when it moves every frame; "
               "p50 %.0f us, p99 %.0f us when it holds\n",
               pct(moving_us, 50), pct(moving_us, 99), pct(still_us, 50), pct(still_us, 99));
+}
+
+// With the base scanner's scans (ScanInput): perception and the simulated scanner allocate
+// nothing per frame, the walkers are seen, and the scan's cost per frame is printed beside
+// the frame's alone.
+TEST(PerceptionAlloc, AScanBesideEachFrameAllocatesNothingAndItsCostIsPrinted) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_perception_alloc must link staa_rt_alloc_hook";
+  World world(test::officeMap(), test::hsrProfile(), test::kCorridorStart,
+              {test::boxMover({6.5, 3.9}, {6.5, 5.1}, 0.5), test::boxMover({4.0, 5.2}, {3.0, 3.8}, 0.8)});
+  hal::SimDepthConfig c;
+  c.mount = test::hsrHeadMount();
+  c.noise_mm_per_m2 = 1.5;
+  hal::SimDepthCamera camera(world, c);
+  hal::SimScanConfig sc;
+  sc.dropout = 0.01;
+  hal::ScanRenderer scanner(test::officeMap(), sc);
+  std::vector<hal::PrismView> prisms;
+  for (std::size_t i = 0; i < world.moverCount(); ++i) {
+    prisms.push_back(hal::PrismView{PolygonView(world.mover(i).polygon), world.moverPosition(i), 1.7});
+  }
+  DepthObstacleDetector fused(test::officeMap(), hal::CameraIntrinsics{}, test::hsrHeadMount());
+  DepthObstacleDetector alone(test::officeMap(), hal::CameraIntrinsics{}, test::hsrHeadMount());
+  auto frame = test::newFrame();
+  auto scan = std::make_unique<hal::LaserScan>();
+  hal::ObstacleFrame out;
+  ASSERT_TRUE(camera.read(0, *frame));  // the renderer's bins grow on the first frame
+  std::uint64_t allocations = 0;
+  std::size_t seen_fused = 0, seen_alone = 0;
+  std::vector<double> fused_us, alone_us;
+  fused_us.reserve(300);
+  alone_us.reserve(300);
+  for (int k = 1; k <= 300; ++k) {
+    world.step(kDt, 0.2, k < 150 ? 0.3 : -0.3);
+    ASSERT_TRUE(camera.read(k * kPeriod, *frame));
+    for (std::size_t i = 0; i < prisms.size(); ++i) prisms[i].position = world.moverPosition(i);
+    rt::AllocationScope scope;
+    scanner.render(world.robot().pose, prisms, *scan);
+    scan->stamp = frame->stamp;
+    rt::Nanos c0 = rt::threadCpuTime();
+    fused.process(*frame, world.robot().pose, out, ScanInput{scan.get(), sc.mount, world.robot().pose});
+    fused_us.push_back(static_cast<double>(rt::threadCpuTime() - c0) * 1e-3);
+    seen_fused += out.count;
+    c0 = rt::threadCpuTime();
+    alone.process(*frame, world.robot().pose, out);
+    alone_us.push_back(static_cast<double>(rt::threadCpuTime() - c0) * 1e-3);
+    seen_alone += out.count;
+    allocations += scope.count();
+  }
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(seen_fused, seen_alone + 100);  // the scan saw the walkers where the camera did not
+  std::sort(fused_us.begin(), fused_us.end());
+  std::sort(alone_us.begin(), alone_us.end());
+  const auto pct = [](const std::vector<double>& v, std::size_t p) { return v[v.size() * p / 100]; };
+  std::printf("perception, pixel_stride 4, with a 1081-beam scan: CPU p50 %.0f us, p99 %.0f us; the frame alone "
+              "p50 %.0f us, p99 %.0f us\n",
+              pct(fused_us, 50), pct(fused_us, 99), pct(alone_us, 50), pct(alone_us, 99));
 }
 
 }  // namespace

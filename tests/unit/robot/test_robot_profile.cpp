@@ -275,3 +275,54 @@ TEST(RobotProfile, LoadNamesAMissingFile) {
 
 }  // namespace
 }  // namespace staa
+
+namespace staa {
+namespace {
+
+TEST(RobotProfile, ShippedProfilesHaveTheirBaseScanner) {
+  const RobotProfile hsr = loadRobotProfile(test::sourceDir() / "config/robots/hsr.yaml");
+  ASSERT_TRUE(hsr.has_scanner);
+  EXPECT_EQ(hsr.scanner.x, 0.1675);  // base_range_sensor_joint
+  EXPECT_EQ(hsr.scanner.z, 0.1844);
+  EXPECT_EQ(hsr.scanner.fov_deg, 270.0);
+  EXPECT_EQ(hsr.scanner.beams, 1081);
+  // The paper agent's, the same from its file and from code.
+  const RobotProfile loaded = loadRobotProfile(test::sourceDir() / "config/robots/paper-agent.yaml");
+  const RobotProfile paper = paperAgentProfile();
+  ASSERT_TRUE(loaded.has_scanner);
+  ASSERT_TRUE(paper.has_scanner);
+  const ScannerProfile& a = loaded.scanner;
+  const ScannerProfile& b = paper.scanner;
+  for (const auto& [name, x, y] : std::vector<std::tuple<const char*, double, double>>{
+           {"x", a.x, b.x}, {"y", a.y, b.y}, {"z", a.z, b.z}, {"yaw", a.yaw, b.yaw}, {"fov", a.fov_deg, b.fov_deg},
+           {"beams", a.beams, b.beams}, {"min_range", a.min_range_m, b.min_range_m},
+           {"max_range", a.max_range_m, b.max_range_m}, {"noise", a.noise_m, b.noise_m}, {"dropout", a.dropout, b.dropout}}) {
+    EXPECT_EQ(x, y) << name;
+  }
+  EXPECT_EQ(a.z, 0.2);
+  EXPECT_EQ(a.dropout, 0.01);
+}
+
+TEST(RobotProfile, EachBadScannerValueNamesItsKeyLineAndValue) {
+  const std::string base = withLine(kSquare, kLimits) + "scanner:\n";
+  const std::string mount = "  mount: {z: 0.2}\n";
+  const RobotProfile none = parseRobotProfile(withLine(kSquare, kLimits), "r.yaml");
+  EXPECT_FALSE(none.has_scanner);
+  const RobotProfile some = parseRobotProfile(base + mount + "  fov_deg: 180\n  beams: 721\n", "r.yaml");
+  ASSERT_TRUE(some.has_scanner);
+  EXPECT_EQ(some.scanner.fov_deg, 180.0);
+  EXPECT_EQ(some.scanner.beams, 721);
+  EXPECT_EQ(some.scanner.max_range_m, ScannerProfile{}.max_range_m);
+  EXPECT_THAT(errorOf(base + "  mount: {z: 0}\n"), HasSubstr("robot.yaml:6: scanner.mount.z: must be > 0 m"));
+  EXPECT_THAT(errorOf(base + "  mount: {x: 0.1}\n"), HasSubstr("scanner.mount.z: missing"));
+  EXPECT_THAT(errorOf(base + mount + "  fov_deg: 400\n"), HasSubstr("scanner.fov_deg: must be in [1, 360] degrees, got 400"));
+  EXPECT_THAT(errorOf(base + mount + "  beams: 5000\n"), HasSubstr("scanner.beams: must be an integer in 2..2048"));
+  EXPECT_THAT(errorOf(base + mount + "  beams: 10.5\n"), HasSubstr("scanner.beams"));
+  EXPECT_THAT(errorOf(base + mount + "  range_m: [2, 1]\n"), HasSubstr("scanner.range_m[1]: must be in (2, 100] m"));
+  EXPECT_THAT(errorOf(base + mount + "  noise_m: -1\n"), HasSubstr("scanner.noise_m: must be in [0, 1] m"));
+  EXPECT_THAT(errorOf(base + mount + "  dropout: 1\n"), HasSubstr("scanner.dropout: must be in [0, 1)"));
+  EXPECT_THAT(errorOf(base + mount + "  rate: 40\n"), HasSubstr("scanner.rate: unknown key"));
+}
+
+}  // namespace
+}  // namespace staa
