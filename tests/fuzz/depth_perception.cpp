@@ -3,13 +3,16 @@
 // control period apart (the second one tracks); with flag 8 also staa-sim's agents' settings
 // over 8 frames that turn away from what was seen (kept tracks). The obstacles are finite
 // convex outlines of at most max_vertices with finite velocities no faster than
-// max_speed_mps, kept no longer than keep_unseen_s. No exception.
+// max_speed_mps, kept no longer than keep_unseen_s. With flag 16 each frame comes with a scan
+// (ScanInput) of arbitrary geometry, pose and mount, its ranges the same bytes read as floats:
+// the same holds. No exception.
 #include "fuzz_support.hpp"
 #include "map/polygon_map.hpp"
 #include "perception/depth_obstacles.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 
 namespace {
@@ -60,6 +63,32 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                   in.take<double>(), in.take<double>(), in.take<double>()};
   if ((flags & 2) == 0) robot = {2.0, 4.5, 0.0};  // mostly a pose inside the office
   if ((flags & 4) == 0) frame->mount = mount;
+  static const auto scan = std::make_unique<hal::LaserScan>();
+  ScanInput scan_input;
+  if ((flags & 16) != 0) {
+    scan->angle_min = in.take<double>();
+    scan->angle_increment = in.take<double>();
+    scan->range_min = in.take<double>();
+    scan->range_max = in.take<double>();
+    scan->count = in.take<std::uint16_t>();
+    scan_input = ScanInput{scan.get(),
+                           hal::ScanMount{in.take<double>(), in.take<double>(), in.take<double>(), in.take<double>()},
+                           Pose2{in.take<double>(), in.take<double>(), in.take<double>()}};
+    if ((flags & 32) == 0) {  // mostly a sweep that passes hal::scanProblem, from the frame's pose
+      scan->angle_min = -2.356;
+      scan->angle_increment = 0.0043633;
+      scan->range_min = 0.05;
+      scan->range_max = 20.0;
+      scan->count = 1081;
+      scan_input.robot = robot;
+    }
+    const std::size_t m = in.restSize() / 4;
+    for (std::size_t i = 0; i < scan->ranges.size(); ++i) {
+      float r = 0.0F;
+      if (m > 0) std::memcpy(&r, in.rest() + 4 * (i % m), sizeof r);
+      scan->ranges[i] = r;
+    }
+  }
   // The rest, tiled over the frame: a small input is a repeating pattern of depths.
   const std::size_t n = in.restSize() / 2;
   for (std::size_t i = 0; i < frame->depth_mm.size(); ++i) {
@@ -69,7 +98,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (int k = 0; k < 2; ++k) {
     frame->stamp = 1'000'000'000 + k * 33'000'000;
     frame->sequence = static_cast<std::uint64_t>(k);
-    detector.process(*frame, robot, out);
+    detector.process(*frame, robot, out, scan_input);
     requireSound(out, detector.config());
   }
   // Flag 8: staa-sim's settings over more frames: the same depths seen 4 times (tracks are
@@ -84,7 +113,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (k == 7) std::fill(frame->depth_mm.begin(), frame->depth_mm.end(), std::uint16_t{0});
       frame->stamp = 2'000'000'000LL + k * 33'333'333LL;
       frame->sequence = static_cast<std::uint64_t>(k);
-      agent.process(*frame, at, out);
+      agent.process(*frame, at, out, scan_input);
       requireSound(out, agent.config());
     }
   }

@@ -40,6 +40,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       fuzz::require(std::isfinite(c.noise_mm_per_m2) && std::isfinite(c.pan_rate) && std::isfinite(c.look_ahead_m),
                     "a camera value not finite");
     }
+    if (p.has_scanner) {
+      // What staa-sim's ScanRenderer relies on (world/sim_laser_scan.cpp's checks).
+      const ScannerProfile& c = p.scanner;
+      fuzz::require(std::isfinite(c.z) && c.z > 0.0, "scan plane below the floor");
+      fuzz::require(std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.yaw), "scanner mount not finite");
+      fuzz::require(c.fov_deg >= 1.0 && c.fov_deg <= 360.0, "sweep out of range");
+      fuzz::require(c.beams >= 2 && c.beams <= ScannerProfile::kMaxBeams, "beams out of range");
+      fuzz::require(c.min_range_m >= 0.0 && c.max_range_m > c.min_range_m && std::isfinite(c.max_range_m),
+                    "scan range out of order");
+      fuzz::require(c.noise_m >= 0.0 && c.noise_m <= 1.0 && c.dropout >= 0.0 && c.dropout < 1.0,
+                    "scan noise or dropout out of range");
+    }
   } catch (const ProfileError&) {
   }
   return 0;

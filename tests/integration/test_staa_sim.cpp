@@ -270,9 +270,11 @@ TEST_F(StaaSim, BadInputExitsTwoNamingTheValue) {
       {{"--map", "map.yaml", "--start", "1,1,0", "--goal", "5,5,0"}, "--goal (5.00, 5.00, 0.00)"},
       {{"--scenario", "typo.yaml"}, "speeed"},
       {{"--scenario", "scenario.yaml", "--map", "map.yaml"}, "--map"},
-      {with(ok_goal, {"--obstacles", "lidar"}), "--obstacles: expected truth or depth, got 'lidar'"},
+      {with(ok_goal, {"--obstacles", "lidar"}), "--obstacles: expected truth, depth or depth+scan, got 'lidar'"},
       {with(ok_goal, {"--robot", "robot.yaml", "--obstacles", "depth"}),
        "--obstacles depth: the robot profile 'robot.yaml' has no camera section"},
+      {with(ok_goal, {"--robot", "robot.yaml", "--obstacles", "depth+scan"}),
+       "--obstacles depth+scan: the robot profile 'robot.yaml' has no camera section"},
   };
   for (const BadInput& c : cases) {
     std::string line;
@@ -316,6 +318,18 @@ TEST_F(StaaSim, DepthObstaclesDriveTheScenarioOnWhatTheCameraSees) {
   ASSERT_EQ(t.exit_code, 0) << t.err;
   EXPECT_EQ(json("truth.json")["obstacles"], "truth");
   EXPECT_FALSE(json("truth.json").contains("camera_frames"));
+  // The base scanner needs its section: exit 2 naming the profile; with it, the run is one.
+  const SimRun no_scanner = sim({"--scenario", "scenario.yaml", "--robot", "camera.yaml", "--obstacles", "depth+scan",
+                                 "--budget-expansions", "300", "--duration", "20", "--quiet"});
+  EXPECT_EQ(no_scanner.exit_code, 2);
+  EXPECT_THAT(no_scanner.err, HasSubstr("--obstacles depth+scan: the robot profile 'camera.yaml' has no scanner section"));
+  writeFile(dir_ / "scanner.yaml", cameraProfile() + "scanner:\n  mount: {z: 0.2}\n");
+  const SimRun d = sim({"--scenario", "scenario.yaml", "--robot", "scanner.yaml", "--obstacles", "depth+scan",
+                        "--budget-expansions", "300", "--duration", "20", "--json", "scan.json", "--quiet"});
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_EQ(json("scan.json")["obstacles"], "depth+scan");
+  EXPECT_TRUE(json("scan.json")["reached_goal"].get<bool>());
+  EXPECT_EQ(json("scan.json")["collisions"], 0);
 }
 
 // ---- multi-agent runs (--agents N > 1 or --mode ghost) ----

@@ -687,8 +687,9 @@ void addOptions(staa::cli::CommandLine& cl, Args& a) {
   cli::choice(app.add_option("--heuristic", a.heuristic, "path-rtr, path-euclid or dijkstra-rtr"),
               cli::kHeuristicNames, a.heuristic);
   cli::choice(app.add_option("--obstacles", a.obstacles,
-                             "truth (the exact polygons and velocities of the movers or other agents) or depth (what "
-                             "the robot profile's depth camera sees of them, through staad's perception)"),
+                             "truth (the exact polygons and velocities of the movers or other agents), depth (what "
+                             "the robot profile's depth camera sees of them, through staad's perception) or depth+scan "
+                             "(the camera and the profile's base laser scanner)"),
               cli::kObstacleNames, a.obstacles);
   app.add_option("--json", a.json_file, "Write the results as JSON to this file");
   app.add_option("--svg", a.svg_dir, "Write frames (frame_NNNNN.svg) into this directory: like the paper's Fig. 1 "
