@@ -252,7 +252,8 @@ void DepthObstacleDetector::addScan(const ScanInput& in, DepthObstaclesStats& st
   if (scan.count < 2 || scan.count > hal::LaserScan::kMaxBeams || !std::isfinite(scan.angle_min) ||
       !std::isfinite(scan.angle_increment) || scan.angle_increment == 0.0 || !std::isfinite(scan.range_max) ||
       !(scan.range_min >= 0.0) || !std::isfinite(in.robot.x) || !std::isfinite(in.robot.y) ||
-      !std::isfinite(in.robot.theta)) {
+      !std::isfinite(in.robot.theta) || !std::isfinite(in.mount.x) || !std::isfinite(in.mount.y) ||
+      !std::isfinite(in.mount.yaw)) {
     return;
   }
   scan_ = &scan;
@@ -298,8 +299,9 @@ bool DepthObstacleDetector::scanSees(const Vec2& p) const {
   const hal::LaserScan& scan = *scan_;
   const Vec2 d = p - scan_sensor_;
   const double distance = d.norm();
-  if (distance < scan.range_min + kRangeMargin ||
-      distance > std::min(scan.range_max, config_.max_range_m) - kRangeMargin) {
+  // Written so that NaN (a place or scan far beyond any sense) is "not seen".
+  if (!(distance >= scan.range_min + kRangeMargin &&
+        distance <= std::min(scan.range_max, config_.max_range_m) - kRangeMargin)) {
     return false;
   }
   // The bearing from beam 0, wrapped to the sweep's side of it.
@@ -307,7 +309,7 @@ bool DepthObstacleDetector::scanSees(const Vec2& p) const {
   bearing -= 2.0 * kPi * std::floor(bearing / (2.0 * kPi));  // [0, 2 pi)
   if (scan.angle_increment < 0.0 && bearing > 0.0) bearing -= 2.0 * kPi;
   const double beam = bearing / scan.angle_increment;
-  if (beam < kEdgeBeams || beam > static_cast<double>(scan.count - 1) - kEdgeBeams) return false;
+  if (!(beam >= kEdgeBeams && beam <= static_cast<double>(scan.count - 1) - kEdgeBeams)) return false;
   const double r = scan.ranges[static_cast<std::size_t>(std::lround(beam))];
   // A return nearer than the place by more than the gate: something in front hides it.
   return !(r >= scan.range_min && r <= scan.range_max && r < distance - config_.gate_m);
