@@ -23,6 +23,7 @@ namespace staa::staad {
 std::string_view toString(HalBackend hal) { return io::nameOf<HalBackend>(kHalBackends, hal); }
 std::string_view toString(ObstacleSource obstacles) { return io::nameOf<ObstacleSource>(kObstacleSources, obstacles); }
 std::string_view toString(CameraBackend backend) { return io::nameOf<CameraBackend>(kCameraBackends, backend); }
+std::string_view toString(ScannerBackend backend) { return io::nameOf<ScannerBackend>(kScannerBackends, backend); }
 
 namespace {
 
@@ -219,6 +220,42 @@ void readCamera(const ConfigValue& root, DaemonConfig& config) {
   readPerception(camera, c);
 }
 
+// obstacles: depth: the base's laser scanner (after the camera: backend sim scans the world
+// the camera renders).
+void readScanner(const ConfigValue& root, DaemonConfig& config) {
+  const ConfigValue scanner =
+      root.section("scanner", {"backend", "mount", "max_age_s", "fov_deg", "beams", "range_m", "noise_m"});
+  const ConfigValue m = scanner.section("mount", {"x", "y", "z", "yaw"});
+  if (config.obstacles != ObstacleSource::kDepth) return;  // checked for typos only
+  ScannerConfig& c = config.scanner;
+  const ConfigValue backend = scanner.get("backend");
+  if (backend.given()) c.backend = backend.choice<ScannerBackend>(kScannerBackends);
+  // The simulated scanner scans the movers the simulated camera renders, at its frames.
+  if (c.backend == ScannerBackend::kSim && config.camera.backend != CameraBackend::kSim) {
+    backend.fail("sim scans the simulated world the camera renders: it needs camera.backend: sim, got camera.backend " +
+                 std::string(toString(config.camera.backend)) + " (use scanner.backend: ros or none)");
+  }
+  auto read = [](const ConfigValue& section, std::string_view key, double& out, const Range& range) {
+    if (const ConfigValue n = section.get(key); n.given()) out = n.number(range);
+  };
+  const Range offset = Range::closed(-RobotProfile::kMaxFootprintM, RobotProfile::kMaxFootprintM, "m", "on the base");
+  read(m, "x", c.mount.x, offset);
+  read(m, "y", c.mount.y, offset);
+  read(m, "z", c.mount.z, Range::above(0.0, "m", "the scan plane above the floor"));
+  read(m, "yaw", c.mount.yaw, Range::closed(-kPi, kPi, "rad"));
+  read(scanner, "max_age_s", c.max_age_s, Range::leftOpen(0.0, 1.0, "s", "from the depth frame's stamp"));
+  read(scanner, "fov_deg", c.fov_deg, Range::closed(1.0, 360.0, "degrees"));
+  if (const ConfigValue n = scanner.get("beams"); n.given()) {
+    c.beams = static_cast<int>(n.integer(2, static_cast<long long>(hal::LaserScan::kMaxBeams), " (beams over the sweep)"));
+  }
+  if (const ConfigValue range = scanner.get("range_m"); range.given()) {
+    range.numbers<2>("[min, max] range in metres");
+    c.range_min_m = range[0].number(Range::atLeast(0.0, "m"));
+    c.range_max_m = range[1].number(Range::leftOpen(c.range_min_m, 100.0, "m", "above min"));
+  }
+  read(scanner, "noise_m", c.noise_m, Range::closed(0.0, 1.0, "m"));
+}
+
 void readSim(const ConfigValue& root, DaemonConfig& config) {
   const ConfigValue sim = root.section("sim", {"start", "movers", "mover_speed", "mover_radius", "seed", "sensor_range_m"});
   // The simulated obstacles arrive at the perception rate, like a depth camera's frames.
@@ -337,11 +374,13 @@ bool validRosName(std::string_view name) {
 
 void readRos(const ConfigValue& root, DaemonConfig& config) {
   const ConfigValue ros = root.section("ros", {"master_uri", "node_name", "master_wait_s", "frames", "base", "localization",
-                                              "goals", "map", "camera", "markers", "diagnostics"});
+                                              "goals", "map", "camera", "scanner", "markers", "diagnostics"});
   RosConfig& r = config.ros;
   ros::TransportConfig& t = r.transport;
   const bool camera_ros = config.obstacles == ObstacleSource::kDepth && config.camera.backend == CameraBackend::kRos;
-  r.enabled = ros.given() || config.hal == HalBackend::kRos || config.map_from_ros || camera_ros;
+  // config.scanner is read only with obstacles: depth (its backend stays none otherwise).
+  const bool scanner_ros = config.scanner.backend == ScannerBackend::kRos;
+  r.enabled = ros.given() || config.hal == HalBackend::kRos || config.map_from_ros || camera_ros || scanner_ros;
   // A name, or "" for off where `may_be_off`.
   auto name = [](const ConfigValue& section, std::string_view key, std::string& out, bool may_be_off) {
     const ConfigValue n = section.get(key);
@@ -414,6 +453,9 @@ void readRos(const ConfigValue& root, DaemonConfig& config) {
   name(camera, "image", t.image_topic, false);
   name(camera, "info", t.camera_info_topic, false);
   positive(camera, "tf_timeout_s", t.camera_tf_timeout_s, "s");
+
+  const ConfigValue scanner = ros.section("scanner", {"topic"});
+  name(scanner, "topic", t.scan_topic, false);
 
   const ConfigValue markers = ros.section("markers", {"topic", "rate_hz", "tree_hz"});
   name(markers, "topic", t.markers_topic, false);
@@ -587,9 +629,9 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   const fs::path absolute = fs::absolute(source, ec);
   const fs::path base = (ec ? source : absolute).parent_path();
   const io::ConfigDocument doc = io::ConfigDocument::parse(yaml_text, source.string(), base);
-  const ConfigValue& root = doc.root(kFormat, {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "camera", "rates",
-                                               "budget", "threads", "socket", "limits", "goal", "telemetry", "recorder", "memory",
-                                               "debug", "ros"});
+  const ConfigValue& root = doc.root(kFormat, {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "camera",
+                                               "scanner", "rates", "budget", "threads", "socket", "limits", "goal",
+                                               "telemetry", "recorder", "memory", "debug", "ros"});
   DaemonConfig config;
   config.file = source;
   if (const ConfigValue hal = root.get("hal"); hal.given()) config.hal = hal.choice<HalBackend>(kHalBackends);
@@ -601,6 +643,7 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   readRates(root, config);
   readBudget(root, config);
   readCamera(root, config);
+  readScanner(root, config);
   readSim(root, config);
   readSocketCan(root, base, config);
   readThreads(root, config);

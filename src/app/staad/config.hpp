@@ -22,6 +22,14 @@
 //                  max_height_m: 1.8, cell_m: 0.1, min_points_per_cell: 3,
 //                  min_cluster_points: 8, cluster_gap_m: 0.3, static_margin_m: 0.15,
 //                  max_vertices: 16, gate_m: 0.5, max_speed_mps: 2.5, max_missed_frames: 5}
+//   scanner:                                 # obstacles: depth: the base's laser scanner beside
+//     backend: none                          # none | sim (camera.backend sim's world) | ros (ros.scanner)
+//     mount: {x: 0.1675, y: 0.0, z: 0.1844, yaw: 0.0}  # base frame (m, rad): the HSR-B's
+//     max_age_s: 0.1                         # a scan older than this at a depth frame is not used
+//     fov_deg: 270                           # backend sim: the sweep, centred on the yaw,
+//     beams: 1081                            #   its beams (both ends included),
+//     range_m: [0.05, 20.0]                  #   the ranges that return,
+//     noise_m: 0.01                          #   the range noise (standard deviation)
 //   rates: {control_hz: 30, base_hz: 100, perception_hz: 30}
 //   budget: {ms: 19}                         # or {expansions: 1000}
 //   threads:                                 # priority 0: normal scheduling; cpu -1: any
@@ -49,6 +57,7 @@
 //     map: {topic: /map, wait_s: 30, occupied_thresh: 0.65, free_thresh: 0.196, simplify_m: 0.05}
 //     camera: {image: /hsrb/head_rgbd_sensor/depth_registered/image_rect_raw,
 //              info: /hsrb/head_rgbd_sensor/depth_registered/camera_info, tf_timeout_s: 0.05}
+//     scanner: {topic: /hsrb/base_scan}      # sensor_msgs/LaserScan (scanner.backend: ros)
 //     markers: {topic: /staad/markers, rate_hz: 10, tree_hz: 1}
 //     diagnostics: {topic: /diagnostics, rate_hz: 1}
 //   map: ros                                 # instead of a file: the latched map on ros.map.topic
@@ -58,6 +67,7 @@
 #include "world/sim_hal.hpp"
 #include "hal/socketcan/can_profile.hpp"
 #include "hal/depth_camera.hpp"
+#include "hal/laser_scan.hpp"
 #include "map/polygon_map.hpp"
 #include "perception/depth_obstacles.hpp"
 #include "rt/realtime.hpp"
@@ -94,9 +104,17 @@ inline constexpr io::Choice<CameraBackend> kCameraBackends[] = {
     {"openni2", CameraBackend::kOpenNI2, "the Xtion"},
     {"ros", CameraBackend::kRos, "sensor_msgs/Image over ROS: ros.camera"}};
 
+// scanner.backend: where the base's laser scans come from (obstacles: depth only).
+enum class ScannerBackend { kNone, kSim, kRos };
+inline constexpr io::Choice<ScannerBackend> kScannerBackends[] = {
+    {"none", ScannerBackend::kNone, "the camera alone"},
+    {"sim", ScannerBackend::kSim, "scans of the simulated world the camera renders"},
+    {"ros", ScannerBackend::kRos, "sensor_msgs/LaserScan over ROS: ros.scanner"}};
+
 std::string_view toString(HalBackend hal);          // "sim", "socketcan", "ros"
 std::string_view toString(ObstacleSource obstacles);  // "sim", "depth", "none"
 std::string_view toString(CameraBackend backend);   // "sim", "openni2", "ros"
+std::string_view toString(ScannerBackend backend);  // "none", "sim", "ros"
 
 // hal: socketcan: the base over SocketCAN (hal/socketcan).
 struct SocketCanConfig {
@@ -119,9 +137,29 @@ struct CameraConfig {
   DepthObstaclesConfig perception;   // camera.perception (stride = pixel_stride)
 };
 
+// obstacles: depth: the base's laser scanner beside the camera (the HSR-B's
+// /hsrb/base_scan): each depth frame is perceived with the newest scan, its returns in the
+// same grid as the frame's points (depth_sensor.hpp). Its pose is the mount (no tf lookup:
+// the scanner does not move on the base).
+struct ScannerConfig {
+  ScannerBackend backend = ScannerBackend::kNone;
+  // The HSR-B's base_range_sensor_joint (config/robots/hsr.yaml's scanner).
+  hal::ScanMount mount{0.1675, 0.0, 0.1844, 0.0};
+  // A scan farther than this from a depth frame's stamp is not perceived with it (s).
+  double max_age_s = 0.1;
+  // backend sim: the sweep (degrees, centred on the mount's yaw), its beams (both ends
+  // included), the ranges that return (m) and the range noise (m, standard deviation).
+  double fov_deg = 270.0;
+  int beams = 1081;
+  double range_min_m = 0.05;
+  double range_max_m = 20.0;
+  double noise_m = 0.01;
+};
+
 // The ros section (docs/ros.md): topics, frames and rates of the ROS link. Defaults are the
 // HSR-B's ROS 1 names. The link runs when the section is given or anything is taken over ROS
-// (hal: ros, map: ros, camera.backend: ros); goals, markers and diagnostics come with it.
+// (hal: ros, map: ros, camera.backend: ros, scanner.backend: ros); goals, markers and
+// diagnostics come with it.
 struct RosConfig {
   bool enabled = false;
   ros::TransportConfig transport;
@@ -160,6 +198,7 @@ struct DaemonConfig {
   RosConfig ros;                      // the ROS link
   ObstacleSource obstacles = ObstacleSource::kSim;  // the sim world's movers | camera | empty frames
   CameraConfig camera;                // obstacles: depth
+  ScannerConfig scanner;              // obstacles: depth (backend none: the camera alone)
   double control_hz = 30.0;
   double base_hz = 100.0;
   double perception_hz = 30.0;

@@ -55,6 +55,7 @@ class Daemon {
   void startRosLink();
   hal::Base* rosBase();
   std::unique_ptr<hal::DepthCamera> rosCamera();
+  std::unique_ptr<hal::LaserScanner> rosScanner();
   void startThreads();
   // Starts the thread that steps `runnable` at `hz`, as `activity`.
   void startActivity(std::unique_ptr<rt::PeriodicActivity>& activity, const char* name, rt::Runnable& runnable,
@@ -151,7 +152,7 @@ void Daemon::createWorkspaces() {
     odometry_tap_ = std::make_unique<OdometryTap>(*base, *odometry_slot_);
     base = odometry_tap_.get();
     try {
-      depth_ = makeDepthSensor(config_, sim_.get(), *odometry_slot_, rosCamera());
+      depth_ = makeDepthSensor(config_, sim_.get(), *odometry_slot_, rosCamera(), rosScanner());
     } catch (const DepthCameraError& e) {
       std::string message = config_.file.string();
       message.append(": camera.backend: ").append(e.what());
@@ -185,9 +186,13 @@ void Daemon::createWorkspaces() {
   so.debug_faults = config_.debug_faults;
   so.recorder = recording_.get();
   service_ = std::make_unique<Service>(*channels_, *notifier_, so, log_);
+  // The fields other parts own: the ROS link's counts, the scanner's.
+  service_->completeStatusWith([this](Status& s) {
 #ifdef STAA_HAVE_ROS1
-  if (ros_) service_->completeStatusWith([this](Status& s) { ros_->fillStatus(s); });
+    if (ros_) ros_->fillStatus(s);
 #endif
+    if (depth_) s.scanner = depth_->scannerStatus();
+  });
   service_->open();
 }
 
@@ -227,14 +232,21 @@ void Daemon::createRosLink() {
   ros_ = std::make_unique<RosBridge>(config_, *channels_);
 #else
   throw ConfigError(config_.file.string() +
-                    ": this staad was built without ROS (hal: ros, map: ros, camera.backend: ros or a ros section need "
-                    "the ROS 1 packages at build time: toolchain/install-deps.sh)");
+                    ": this staad was built without ROS (hal: ros, map: ros, camera.backend: ros, scanner.backend: ros or a "
+                    "ros section need the ROS 1 packages at build time: toolchain/install-deps.sh)");
 #endif
 }
 
 std::unique_ptr<hal::DepthCamera> Daemon::rosCamera() {
 #ifdef STAA_HAVE_ROS1
   if (ros_) return ros_->takeCamera();
+#endif
+  return nullptr;
+}
+
+std::unique_ptr<hal::LaserScanner> Daemon::rosScanner() {
+#ifdef STAA_HAVE_ROS1
+  if (ros_) return ros_->takeScanner();
 #endif
   return nullptr;
 }
@@ -359,6 +371,11 @@ void Daemon::shutdown() {
                 static_cast<unsigned long long>(rt::realtimeAllocations()));
   say(line);
   for (const rt::PeriodicActivity* a : {control_.get(), base_.get(), perception_.get()}) reportTiming(a);
+  if (depth_ && depth_->hasScanner()) {
+    say("scanner: " + std::to_string(depth_->frames()) + " depth frames, " + std::to_string(depth_->scansUsed()) +
+        " perceived with a scan, " + std::to_string(depth_->scansTooOld()) + " without (the newest scan older than " +
+        "scanner.max_age_s), " + std::to_string(depth_->framesWithoutScan()) + " before the first scan");
+  }
   service_->writeRunSvg(config_.map, config_.robot.footprint);
   service_->close();
   if (recording_) {

@@ -353,6 +353,15 @@ Json baseJson(const hal::BaseStatus& b) {
                             {"last_jump_rad", b.last_jump_rad}}}};
 }
 
+// scanner.backend ros's LaserScans: received, dropped, and dropped by the first check failed.
+Json scansJson(const RosLinkStatus& r) {
+  Json by = Json::object();
+  for (std::size_t i = 0; i < hal::kRosScanDropReasons; ++i) {
+    by[hal::toString(static_cast<hal::RosScanDrop>(i))] = r.scans_dropped_by[i];
+  }
+  return {{"in", r.scans_in}, {"dropped", r.scans_dropped}, {"dropped_by", std::move(by)}};
+}
+
 Json rosJson(const RosLinkStatus& r) {
   if (!r.enabled) return nullptr;
   Json latency = timingJson(r.odometry_to_twist);
@@ -366,7 +375,18 @@ Json rosJson(const RosLinkStatus& r) {
           {"goals_refused", r.goals_refused},
           {"maps", {{"in", r.maps_in}, {"applied", r.maps_applied}, {"refused", r.maps_refused},
                     {"import_s", r.map_import_s}}},
-          {"images", {{"in", r.images_in}, {"dropped", r.images_dropped}}}};
+          {"images", {{"in", r.images_in}, {"dropped", r.images_dropped}}},
+          {"scans", scansJson(r)}};
+}
+
+// obstacles: depth's laser scanner; null without one.
+Json scannerJson(const ScannerStatus& s) {
+  if (!s.enabled) return nullptr;
+  return {{"backend", s.backend},
+          {"scans_used", s.scans_used},
+          {"scans_too_old", s.scans_too_old},
+          {"frames_without_scan", s.frames_without_scan},
+          {"scan_points", s.scan_points}};
 }
 
 Json commandToWireJson(const CommandToWire& w) {
@@ -427,6 +447,7 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
                   {"local_max_us", static_cast<double>(status.local_max_ns) * 1e-3}};
   j["time_s"] = status.time_s;
   j["ros"] = rosJson(status.ros);
+  j["scanner"] = scannerJson(status.scanner);
   return j;
 }
 

@@ -82,6 +82,13 @@ RosBridge::RosBridge(const DaemonConfig& config, Channels& channels)
   if (!(config.obstacles == ObstacleSource::kDepth && config.camera.backend == CameraBackend::kRos)) {
     transport_config_.image_topic.clear();
   }
+  if (!(config.obstacles == ObstacleSource::kDepth && config.scanner.backend == ScannerBackend::kRos)) {
+    transport_config_.scan_topic.clear();
+  }
+  if (!transport_config_.scan_topic.empty()) {
+    scanner_owned_ = std::make_unique<hal::RosLaserScanner>();
+    scanner_ = scanner_owned_.get();
+  }
   if (!transport_config_.image_topic.empty()) {
     hal::RosDepthCameraConfig c;
     c.intrinsics = config.camera.intrinsics;
@@ -103,6 +110,7 @@ void RosBridge::start() {
   ros::TransportSinks sinks;
   sinks.base = base_.get();
   sinks.camera = camera_owned_ ? camera_owned_.get() : nullptr;
+  sinks.scanner = scanner_owned_ ? scanner_owned_.get() : nullptr;
   sinks.map = this;
   transport_ = ros::startRos1Transport(transport_config_, sinks);
   master_ = true;
@@ -370,6 +378,13 @@ void RosBridge::fillStatus(Status& s) const {
   if (camera_ != nullptr) {
     s.ros.images_in = camera_->accepted() + camera_->droppedTotal();
     s.ros.images_dropped = camera_->droppedTotal();
+  }
+  if (scanner_ != nullptr) {
+    s.ros.scans_in = scanner_->accepted() + scanner_->droppedTotal();
+    s.ros.scans_dropped = scanner_->droppedTotal();
+    for (std::size_t i = 0; i < hal::kRosScanDropReasons; ++i) {
+      s.ros.scans_dropped_by[i] = scanner_->dropped(static_cast<hal::RosScanDrop>(i));
+    }
   }
 }
 

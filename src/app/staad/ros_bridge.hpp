@@ -24,6 +24,7 @@
 #include "app/staad/ros/transport.hpp"
 #include "hal/ros/ros_base.hpp"
 #include "hal/ros/ros_depth_camera.hpp"
+#include "hal/ros/ros_laser_scanner.hpp"
 #include "map/ros_import.hpp"
 #include "rt/clock.hpp"
 #include "rt/realtime.hpp"
@@ -61,6 +62,8 @@ class RosBridge final : public ros::MapSink {
   // camera.backend: ros: the camera the transport feeds, handed to perception (which owns it
   // from then on and outlives the bridge); null otherwise.
   std::unique_ptr<hal::RosDepthCamera> takeCamera() { return std::move(camera_owned_); }
+  // scanner.backend: ros: the base's laser scanner the transport feeds, handed over likewise.
+  std::unique_ptr<hal::RosLaserScanner> takeScanner() { return std::move(scanner_owned_); }
 
   // map: ros at start-up: the first map that imports (the ones that fail are logged), or
   // nothing after `timeout`. Service thread, before the real-time threads start.
@@ -93,6 +96,8 @@ class RosBridge final : public ros::MapSink {
   std::unique_ptr<hal::RosBase> base_;
   std::unique_ptr<hal::RosDepthCamera> camera_owned_;  // until takeCamera()
   const hal::RosDepthCamera* camera_ = nullptr;        // for the status's counts
+  std::unique_ptr<hal::RosLaserScanner> scanner_owned_;  // until takeScanner()
+  const hal::RosLaserScanner* scanner_ = nullptr;        // for the status's counts
   std::unique_ptr<ros::Transport> transport_;
   rt::RtThread publisher_;
   std::atomic<bool> running_{false};

@@ -5,6 +5,7 @@
 
 #include "geometry/types.hpp"
 #include "hal/base.hpp"
+#include "hal/ros/ros_laser_scanner.hpp"
 #include "rt/activity.hpp"
 #include "rt/timing_stats.hpp"
 
@@ -51,6 +52,21 @@ struct RosLinkStatus {
   double map_import_s = 0.0;        // the last map's import and planner set-up
   std::uint64_t images_in = 0;
   std::uint64_t images_dropped = 0;
+  // scanner.backend ros: the LaserScans received, and those dropped by their reason.
+  std::uint64_t scans_in = 0;
+  std::uint64_t scans_dropped = 0;
+  std::array<std::uint64_t, hal::kRosScanDropReasons> scans_dropped_by{};
+};
+
+// obstacles: depth with the base's laser scanner (scanner.backend sim or ros), filled in by
+// the service thread from the depth sensor's counters; `enabled` false without one.
+struct ScannerStatus {
+  bool enabled = false;
+  const char* backend = "none";          // "sim", "ros"
+  std::uint64_t scans_used = 0;          // depth frames perceived with a scan
+  std::uint64_t scans_too_old = 0;       // ... alone: the newest scan was beyond max_age_s
+  std::uint64_t frames_without_scan = 0; // ... alone: no scan had arrived yet
+  std::uint64_t scan_points = 0;         // the last frame's scan returns in perception's grid
 };
 
 struct Status {
@@ -95,6 +111,8 @@ struct Status {
   std::uint64_t queued_goal_id = 0;
   // Set by the service thread: the ROS link.
   RosLinkStatus ros;
+  // Set by the service thread: the base's laser scanner.
+  ScannerStatus scanner;
 };
 
 enum class RequestKind : std::uint8_t { kGoal, kStop, kPose, kStatus, kDebug, kHistograms, kRecord };

@@ -1,7 +1,9 @@
-// obstacles: depth (src/app/staad/depth_sensor.hpp): the camera section of the config (every
-// key read, every bad value named with its key, line and value); the depth sensor in lockstep
-// with the simulated world (a mover walking in front of the robot is reported where it is and
-// as fast as it walks, the walls are not reported, nothing is allocated); and the staad binary
+// obstacles: depth (src/app/staad/depth_sensor.hpp): the camera and scanner sections of the
+// config (every key read, every bad value named with its key, line and value); the depth
+// sensor in lockstep with the simulated world (a mover walking in front of the robot is
+// reported where it is and as fast as it walks, the walls are not reported, nothing is
+// allocated; with the base's scanner a mover beside the robot, out of the camera's view, is
+// seen, and a scan too far from the frame's stamp is not used); and the staad binary
 // with `obstacles: depth` (drives to a goal on rendered frames; `camera.backend: openni2`
 // without a device exits 3 naming camera.backend).
 #include "app/staad/config.hpp"
@@ -9,6 +11,7 @@
 #include "geometry/polygon.hpp"
 #include "world/sim_depth_camera.hpp"
 #include "world/sim_hal.hpp"
+#include "world/sim_laser_scan.hpp"
 #include "rt/alloc_count.hpp"
 #include "world/world.hpp"
 
@@ -364,6 +367,181 @@ TEST_F(CameraConfigFiles, WithOtherObstaclesTheCameraSectionIsOnlyCheckedForTypo
   EXPECT_THAT(error, HasSubstr("camera.ur: unknown key"));
 }
 
+// ---- the scanner section ----
+
+// kDepth with every scanner key, one per line.
+const std::string kScanner = kDepth + R"(scanner:
+  backend: sim
+  mount: {x: 0.1675, y: 0.0, z: 0.1844, yaw: 0.0}
+  max_age_s: 0.1
+  fov_deg: 270
+  beams: 1081
+  range_m: [0.05, 20.0]
+  noise_m: 0.01
+)";
+
+TEST_F(CameraConfigFiles, WithoutAScannerSectionTheCameraIsAloneAndTheDefaultsAreTheHsrsScanner) {
+  const ScannerConfig s = load(kDepth).scanner;
+  EXPECT_EQ(s.backend, ScannerBackend::kNone);
+  EXPECT_DOUBLE_EQ(s.mount.x, 0.1675);  // the HSR-B's base_range_sensor_joint
+  EXPECT_DOUBLE_EQ(s.mount.y, 0.0);
+  EXPECT_DOUBLE_EQ(s.mount.z, 0.1844);
+  EXPECT_DOUBLE_EQ(s.mount.yaw, 0.0);
+  EXPECT_DOUBLE_EQ(s.max_age_s, 0.1);
+  EXPECT_DOUBLE_EQ(s.fov_deg, 270.0);
+  EXPECT_EQ(s.beams, 1081);
+  EXPECT_DOUBLE_EQ(s.range_min_m, 0.05);
+  EXPECT_DOUBLE_EQ(s.range_max_m, 20.0);
+  EXPECT_DOUBLE_EQ(s.noise_m, 0.01);
+  // Only the backend given: the rest as documented.
+  const DaemonConfig sim = load(kDepth + "scanner: {backend: sim}\n");
+  EXPECT_EQ(sim.scanner.backend, ScannerBackend::kSim);
+  EXPECT_DOUBLE_EQ(sim.scanner.mount.z, 0.1844);
+  EXPECT_FALSE(sim.ros.enabled);
+  // The shipped values, written out, are the defaults.
+  const ScannerConfig all = load(kScanner).scanner;
+  EXPECT_EQ(all.backend, ScannerBackend::kSim);
+  EXPECT_DOUBLE_EQ(all.mount.x, s.mount.x);
+  EXPECT_DOUBLE_EQ(all.max_age_s, s.max_age_s);
+  EXPECT_EQ(all.beams, s.beams);
+}
+
+TEST_F(CameraConfigFiles, ShippedConfigsCommentedScannerBlockLoadsWithItsValues) {
+  // config/staad.yaml documents the section as comments ("# scanner:" to the blank line).
+  std::istringstream in(readFile(test::sourceDir() / "config/staad.yaml"));
+  std::string text, line;
+  bool block = false;
+  int lines = 0;
+  while (std::getline(in, line)) {
+    if (line == "# scanner:") block = true;
+    if (block && line.empty()) block = false;
+    if (block && (line == "# scanner:" || line.rfind("#   ", 0) == 0)) {
+      line = line.substr(2);
+      ++lines;
+    }
+    if (line == "obstacles: sim") line = "obstacles: depth\ncamera: {backend: sim}";
+    text += line + "\n";
+  }
+  ASSERT_GE(lines, 8) << "no commented scanner block in config/staad.yaml";
+  for (const char* f : {"robots/hsr.yaml", "maps/office.yaml"}) {
+    fs::create_directories((dir_ / "shipped" / f).parent_path());
+    fs::copy_file(test::sourceDir() / "config" / f, dir_ / "shipped" / f);
+  }
+  const ScannerConfig s = load(text, "shipped/staad.yaml").scanner;
+  const ScannerConfig defaults;
+  EXPECT_EQ(s.backend, ScannerBackend::kSim);
+  EXPECT_DOUBLE_EQ(s.mount.x, defaults.mount.x);
+  EXPECT_DOUBLE_EQ(s.mount.z, defaults.mount.z);
+  EXPECT_DOUBLE_EQ(s.max_age_s, defaults.max_age_s);
+  EXPECT_DOUBLE_EQ(s.fov_deg, defaults.fov_deg);
+  EXPECT_EQ(s.beams, defaults.beams);
+  EXPECT_DOUBLE_EQ(s.range_max_m, defaults.range_max_m);
+  EXPECT_DOUBLE_EQ(s.noise_m, defaults.noise_m);
+}
+
+TEST_F(CameraConfigFiles, ReadsEveryScannerKey) {
+  std::string text = edited("{x: 0.1675, y: 0.0, z: 0.1844, yaw: 0.0}", "{x: 0.2, y: -0.05, z: 0.3, yaw: 3.0}", kScanner);
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"max_age_s: 0.1", "max_age_s: 0.25"},
+           {"fov_deg: 270", "fov_deg: 360"},
+           {"beams: 1081", "beams: 720"},
+           {"range_m: [0.05, 20.0]", "range_m: [0.1, 12]"},
+           {"noise_m: 0.01", "noise_m: 0"},
+       }) {
+    text = edited(from, to, text);
+  }
+  const ScannerConfig s = load(text).scanner;
+  EXPECT_EQ(s.backend, ScannerBackend::kSim);
+  EXPECT_DOUBLE_EQ(s.mount.x, 0.2);
+  EXPECT_DOUBLE_EQ(s.mount.y, -0.05);
+  EXPECT_DOUBLE_EQ(s.mount.z, 0.3);
+  EXPECT_DOUBLE_EQ(s.mount.yaw, 3.0);
+  EXPECT_DOUBLE_EQ(s.max_age_s, 0.25);
+  EXPECT_DOUBLE_EQ(s.fov_deg, 360.0);
+  EXPECT_EQ(s.beams, 720);
+  EXPECT_DOUBLE_EQ(s.range_min_m, 0.1);
+  EXPECT_DOUBLE_EQ(s.range_max_m, 12.0);
+  EXPECT_DOUBLE_EQ(s.noise_m, 0.0);
+  // A full turn: one increment short of 360 degrees, no beam twice.
+  const hal::SimScanConfig sim = simScanConfig(s, 1);
+  EXPECT_DOUBLE_EQ(sim.angle_min, -kPi);
+  EXPECT_NEAR(sim.angle_max, kPi - 2.0 * kPi / 720, 1e-12);
+  EXPECT_EQ(sim.beams, 720);
+  EXPECT_DOUBLE_EQ(sim.mount.yaw, 3.0);
+  EXPECT_DOUBLE_EQ(simScanConfig(ScannerConfig{}, 1).angle_max, 0.75 * kPi);
+
+  // ros: the ROS link runs, the topic from ros.scanner (the HSR's by default).
+  const DaemonConfig ros = load(edited("backend: sim\n  mount", "backend: ros\n  mount", kScanner));
+  EXPECT_EQ(ros.scanner.backend, ScannerBackend::kRos);
+  EXPECT_TRUE(ros.ros.enabled);
+  EXPECT_EQ(ros.ros.transport.scan_topic, "/hsrb/base_scan");
+  const DaemonConfig topic =
+      load(edited("backend: sim\n  mount", "backend: ros\n  mount", kScanner) + "ros: {scanner: {topic: /base_scan}}\n");
+  EXPECT_EQ(topic.ros.transport.scan_topic, "/base_scan");
+}
+
+TEST_F(CameraConfigFiles, EveryBadScannerValueIsNamedWithItsKeyLineAndValue) {
+  const std::string m = "x: 0.1675, y: 0.0, z: 0.1844, yaw: 0.0";
+  const std::vector<BadCase> cases = {
+      {"backend: sim\n  mount", "backend: lidar\n  mount", {"scanner.backend", "none", "sim", "ros", "'lidar'"}},
+      {"backend: sim\n  mount", "backend: [ros]\n  mount", {"scanner.backend", "a list of 1 items"}},
+      {m, "x: abc, y: 0.0, z: 0.1844, yaw: 0.0", {"scanner.mount.x", "expected a number", "'abc'"}},
+      {m, "x: 0.1675, y: 11, z: 0.1844, yaw: 0.0", {"scanner.mount.y", "[-10, 10] m", "got 11"}},
+      {m, "x: 0.1675, y: 0.0, z: 0, yaw: 0.0", {"scanner.mount.z", "> 0 m", "got 0"}},
+      {m, "x: 0.1675, y: 0.0, z: .nan, yaw: 0.0", {"scanner.mount.z", ".nan"}},
+      {m, "x: 0.1675, y: 0.0, z: 0.1844, yaw: 90", {"scanner.mount.yaw", "rad", "got 90"}},
+      {m, m + ", pitch: 0.1", {"scanner.mount.pitch", "unknown key", "x, y, z, yaw"}},
+      {"max_age_s: 0.1", "max_age_s: 0", {"scanner.max_age_s", "(0, 1] s", "got 0"}},
+      {"max_age_s: 0.1", "max_age_s: 2", {"scanner.max_age_s", "got 2"}},
+      {"fov_deg: 270", "fov_deg: 400", {"scanner.fov_deg", "[1, 360] degrees", "got 400"}},
+      {"beams: 1081", "beams: 1", {"scanner.beams", "2..2048", "got 1"}},
+      {"beams: 1081", "beams: 4096", {"scanner.beams", "got 4096"}},
+      {"beams: 1081", "beams: 10.5", {"scanner.beams", "integer", "10.5"}},
+      {"range_m: [0.05, 20.0]", "range_m: [0.05]", {"scanner.range_m", "[min, max]", "a list of 1 items"}},
+      {"range_m: [0.05, 20.0]", "range_m: [-1, 20.0]", {"scanner.range_m[0]", ">= 0 m", "got -1"}},
+      {"range_m: [0.05, 20.0]", "range_m: [5, 2]", {"scanner.range_m[1]", "above min", "got 2"}},
+      {"noise_m: 0.01", "noise_m: -0.01", {"scanner.noise_m", "[0, 1] m", "got -0.01"}},
+      {"noise_m: 0.01", "noise: 0.01", {"scanner.noise", "unknown key", "backend, mount, max_age_s"}},
+  };
+  for (const BadCase& c : cases) {
+    const std::string text = edited(c.from, c.to, kScanner);
+    const std::string error = loadError(text);
+    SCOPED_TRACE(c.to + "  ->  " + error);
+    for (const std::string& e : c.expected) EXPECT_THAT(error, HasSubstr(e));
+    EXPECT_THAT(error, HasSubstr((dir_ / "staad.yaml").string()));
+    if (c.check_line) {
+      EXPECT_THAT(error, HasSubstr("staad.yaml:" + std::to_string(lineOf(text, c.to)) + ": "));
+    }
+  }
+  // ros.scanner's topic: a ROS name.
+  const std::string ros = kScanner + "ros: {scanner: {topic: \"base scan\"}}\n";
+  const std::string topic = loadError(ros);
+  EXPECT_THAT(topic, HasSubstr("ros.scanner.topic"));
+  EXPECT_THAT(topic, HasSubstr("'base scan'"));
+  EXPECT_THAT(loadError(kScanner + "ros: {scanner: {topics: /x}}\n"), HasSubstr("ros.scanner.topics: unknown key"));
+}
+
+TEST_F(CameraConfigFiles, TheSimScannerScansTheRenderedCamerasWorldOnly) {
+  const std::string ni = edited("backend: sim\n  uri", "backend: openni2\n  uri", kScanner);
+  const std::string error = loadError(ni);
+  EXPECT_THAT(error, HasSubstr("staad.yaml:" + std::to_string(lineOf(ni, "backend: sim\n  mount")) +
+                               ": scanner.backend: sim scans the simulated world the camera renders"));
+  EXPECT_THAT(error, HasSubstr("got camera.backend openni2"));
+  // A real camera with the real scanner is fine.
+  const DaemonConfig c = load(edited("backend: sim\n  mount", "backend: ros\n  mount", ni));
+  EXPECT_EQ(c.camera.backend, CameraBackend::kOpenNI2);
+  EXPECT_EQ(c.scanner.backend, ScannerBackend::kRos);
+}
+
+TEST_F(CameraConfigFiles, WithOtherObstaclesTheScannerSectionIsOnlyCheckedForTypos) {
+  const std::string sim = edited("obstacles: depth", "obstacles: sim", kScanner);
+  const DaemonConfig c = load(edited("backend: sim\n  mount", "backend: ros\n  mount", edited("beams: 1081", "beams: 0", sim)));
+  EXPECT_EQ(c.scanner.backend, ScannerBackend::kNone) << "not used: its values are not read";
+  EXPECT_FALSE(c.ros.enabled) << "an unused ros scanner does not start the ROS link";
+  EXPECT_THAT(loadError(edited("noise_m: 0.01", "noise_mm: 0.01", sim)), HasSubstr("scanner.noise_mm: unknown key"));
+  EXPECT_THAT(loadError(edited("z: 0.1844, yaw: 0.0}", "z: 0.1844, yaw: 0.0, roll: 0}", sim)), HasSubstr("scanner.mount.roll: unknown key"));
+}
+
 // ---- the sensor ----
 
 const PolygonMap& officeMap() {
@@ -426,10 +604,12 @@ TEST(DepthSensor, TakesNoFrameBeforeTheFirstOdometryThenFindsTheBoxInFrontOfTheR
 // 100 Hz, the depth sensor read at 30 Hz, the robot turning to keep the walker in view.
 class DepthLockstep {
  public:
-  DepthLockstep(const Pose2& start, std::uint64_t seed)
+  DepthLockstep(const Pose2& start, std::uint64_t seed, bool scanner = false)
       : sim_(officeMap(), hsrProfile(), simConfig(start, seed), 0),
         tap_(sim_.base(), slot_),
-        sensor_(officeMap(), CameraConfig{}, seed, sim_.obstacles(), slot_) {}
+        sensor_(officeMap(), CameraConfig{}, seed, sim_.obstacles(), slot_) {
+    if (scanner) sensor_.addSimScanner(officeMap(), ScannerConfig{}, seed);  // the HSR's, as staad's defaults
+  }
 
   static hal::SimHalConfig simConfig(const Pose2& start, std::uint64_t seed) {
     hal::SimHalConfig c;
@@ -531,9 +711,9 @@ struct WalkerRun {
 // prediction can have drifted apart since it was last seen, and for at most keep_unseen_s);
 // in plain view it is reported, within 0.2 m of where it is, and, settled, within 0.2 m/s of
 // its velocity.
-WalkerRun walkerRun(const Pose2& start, std::uint64_t seed, int frames) {
+WalkerRun walkerRun(const Pose2& start, std::uint64_t seed, int frames, bool scanner = false) {
   constexpr int kSettled = 30;  // frames in view, and at one velocity, before it is compared
-  DepthLockstep ls(start, seed);
+  DepthLockstep ls(start, seed, scanner);
   WalkerRun run;
   run.frames = frames;
   rt::resetRealtimeAllocations();
@@ -659,6 +839,181 @@ TEST(DepthSensor, WalkersElsewhereInTheOfficeAreReportedAsWell) {
     EXPECT_EQ(run.reported, run.visible);
     EXPECT_GE(run.compared, 20);
   }
+}
+
+// ---- the base's scanner beside the camera ----
+
+// A mover frame that never changes (one box standing where it is), every perception period:
+// the sim camera's movers for a scene set by hand.
+class StandingMovers final : public hal::ObstacleSensor {
+ public:
+  explicit StandingMovers(const Polygon& box) {
+    frame_.count = 1;
+    hal::ObstacleFrame::Obstacle& o = frame_.obstacles[0];
+    o.n = box.size();
+    std::copy(box.begin(), box.end(), o.vertices.begin());
+  }
+  bool read(rt::Nanos now, hal::ObstacleFrame& out) override {
+    frame_.stamp = now;
+    out = frame_;
+    return true;
+  }
+
+ private:
+  hal::ObstacleFrame frame_;
+};
+
+// The robot in the office corridor facing +x, a person-sized box 0.9 m to its left: out of the
+// head camera's 58 degrees, in the base scanner's 270.
+struct BesideTheRobot {
+  static constexpr Pose2 kRobot{4.5, 4.5, 0.0};
+  const Polygon box = placed(Polygon{{-0.2, -0.2}, {0.2, -0.2}, {0.2, 0.2}, {-0.2, 0.2}}, Vec2(4.5, 5.4));
+  StandingMovers movers{box};
+  OdometrySlot slot;
+  DepthSensor sensor{officeMap(), CameraConfig{}, 1, movers, slot};
+  hal::ObstacleFrame out;
+
+  BesideTheRobot() {
+    hal::Odometry odometry;
+    odometry.stamp = 0;
+    odometry.pose = kRobot;
+    slot.publish(odometry);
+  }
+  // `frames` perception periods; the obstacles of the last, seen in it, that touch the box.
+  int run(int frames) {
+    for (int k = 0; k < frames; ++k) EXPECT_TRUE(sensor.read(k * 33'333'333LL, out)) << "frame " << k;
+    int at_box = 0;
+    for (std::size_t i = 0; i < out.count; ++i) {
+      const Polygon seen = polygonOf(out.obstacles[i]);
+      double farthest = 0.0;
+      for (const Vec2& v : seen) farthest = std::max(farthest, distanceTo(v, box));
+      EXPECT_LE(farthest, 0.2) << "an obstacle away from the box at " << seen[0].transpose();
+      at_box += (out.obstacles[i].unseen_s == 0.0 && farthest <= 0.2) ? 1 : 0;
+    }
+    return at_box;
+  }
+};
+
+TEST(DepthSensorScanner, AMoverBesideTheRobotIsAnObstacleWithTheSimScannerAndNotWithout) {
+  BesideTheRobot camera_alone;
+  EXPECT_EQ(camera_alone.run(10), 0) << "the box is out of the camera's view";
+  EXPECT_EQ(camera_alone.out.count, 0u);
+  EXPECT_FALSE(camera_alone.sensor.hasScanner());
+  EXPECT_FALSE(camera_alone.sensor.scannerStatus().enabled);
+
+  BesideTheRobot with_scanner;
+  with_scanner.sensor.addSimScanner(officeMap(), ScannerConfig{}, 1);
+  EXPECT_EQ(with_scanner.run(10), 1) << "the scan sees it";
+  const Polygon seen = polygonOf(with_scanner.out.obstacles[0]);
+  EXPECT_LE(distanceTo(Vec2(4.5, 5.2), seen), 0.2) << "its face towards the robot is covered";
+  EXPECT_GT(with_scanner.sensor.lastStats().scan_points, 0u);
+  EXPECT_EQ(with_scanner.sensor.lastScanPoints(), with_scanner.sensor.lastStats().scan_points);
+  EXPECT_EQ(with_scanner.sensor.scansUsed(), 10u) << "the sim scan is taken with each frame";
+  EXPECT_EQ(with_scanner.sensor.scansTooOld(), 0u);
+  EXPECT_EQ(with_scanner.sensor.framesWithoutScan(), 0u);
+  const ScannerStatus status = with_scanner.sensor.scannerStatus();
+  EXPECT_TRUE(status.enabled);
+  EXPECT_STREQ(status.backend, "sim");
+  EXPECT_EQ(status.scans_used, 10u);
+  EXPECT_EQ(status.scan_points, with_scanner.sensor.lastScanPoints());
+}
+
+// A scanner whose next scan the test sets (read once, as a transport's newest scan).
+class ScriptedScanner final : public hal::LaserScanner {
+ public:
+  void set(const hal::LaserScan& scan) {
+    scan_ = scan;
+    fresh_ = true;
+  }
+  bool read(rt::Nanos /*now*/, hal::LaserScan& out) override {
+    if (!fresh_) return false;
+    out = scan_;
+    fresh_ = false;
+    return true;
+  }
+
+ private:
+  hal::LaserScan scan_;
+  bool fresh_ = false;
+};
+
+TEST(DepthSensorScanner, TheNewestScanIsUsedOnlyWithinMaxAgeOfTheFramesStamp) {
+  BesideTheRobot scene;
+  auto owned = std::make_unique<ScriptedScanner>();
+  ScriptedScanner& scripted = *owned;
+  ScannerConfig config;
+  config.backend = ScannerBackend::kRos;
+  config.max_age_s = 0.1;
+  scene.sensor.addScanner(config, std::move(owned));
+  // What the HSR's scanner would see of the scene.
+  hal::ScanRenderer renderer(officeMap(), simScanConfig(config, 3));
+  const hal::PrismView prism{PolygonView(scene.box.data(), scene.box.size()), Vec2(0.0, 0.0), 1.7};
+  auto scan = std::make_unique<hal::LaserScan>();
+  renderer.render(BesideTheRobot::kRobot, std::span<const hal::PrismView>(&prism, 1), *scan);
+
+  constexpr rt::Nanos kPeriod = 33'333'333;
+  rt::Nanos t = rt::kNanosPerSecond;  // scan stamps before it are still >= 0 (< 0: no scan)
+  auto frame = [&] {
+    EXPECT_TRUE(scene.sensor.read(t, scene.out));
+    t += kPeriod;
+  };
+  frame();  // no scan yet: the frame alone
+  EXPECT_EQ(scene.sensor.framesWithoutScan(), 1u);
+  EXPECT_EQ(scene.sensor.lastStats().scan_points, 0u);
+
+  // A scan 50 ms before the frame (within 0.1 s): used, and kept for the next frames while
+  // it is recent enough (the sim camera's frames are stamped with their period's time).
+  scan->stamp = t - 50 * kMs;
+  scripted.set(*scan);
+  frame();
+  EXPECT_EQ(scene.sensor.scansUsed(), 1u);
+  EXPECT_GT(scene.sensor.lastStats().scan_points, 0u);
+  frame();  // 83 ms after the scan: still used
+  EXPECT_EQ(scene.sensor.scansUsed(), 2u);
+  frame();  // 117 ms: too old
+  EXPECT_EQ(scene.sensor.scansTooOld(), 1u);
+  EXPECT_EQ(scene.sensor.lastStats().scan_points, 0u);
+  EXPECT_EQ(scene.sensor.lastScanPoints(), 0u);
+
+  // A scan stamped well after the frame (a camera's frames lag): beyond 0.1 s is not used either.
+  scan->stamp = t + 150 * kMs;
+  scripted.set(*scan);
+  frame();
+  EXPECT_EQ(scene.sensor.scansTooOld(), 2u);
+  scan->stamp = t + 20 * kMs;
+  scripted.set(*scan);
+  frame();
+  EXPECT_EQ(scene.sensor.scansUsed(), 3u);
+  const ScannerStatus status = scene.sensor.scannerStatus();
+  EXPECT_STREQ(status.backend, "ros");
+  EXPECT_EQ(status.scans_used, 3u);
+  EXPECT_EQ(status.scans_too_old, 2u);
+  EXPECT_EQ(status.frames_without_scan, 1u);
+  EXPECT_GT(status.scan_points, 0u);
+  EXPECT_EQ(scene.sensor.frames(), 6u);
+}
+
+TEST(DepthSensorScanner, TheSimScannerNeedsTheSimCamerasWorld) {
+  const Polygon box{{-0.2, -0.2}, {0.2, -0.2}, {0.2, 0.2}, {-0.2, 0.2}};
+  World world(officeMap(), hsrProfile(), Pose2{4.5, 4.5, 0.0}, {Mover{box, {Vec2(7.0, 4.6)}, 0.0}});
+  OdometrySlot slot;
+  DepthSensor sensor(officeMap(), CameraConfig{}, std::make_unique<hal::SimDepthCamera>(world, simDepthConfig(CameraConfig{}, 1)),
+                     slot);
+  EXPECT_THROW(sensor.addSimScanner(officeMap(), ScannerConfig{}, 1), std::logic_error);
+  EXPECT_THROW(sensor.addScanner(ScannerConfig{}, nullptr), std::invalid_argument);
+  EXPECT_FALSE(sensor.hasScanner());
+}
+
+TEST(DepthSensorScanner, WithTheSimScannerTheWalkerIsReportedAndNothingAllocates) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_depth_sensor must link staa_rt_alloc_hook";
+  // The corridor's walker of the camera test, with the base's scanner: what the camera sees
+  // is still reported where the walker is, and the scanner's render and perception allocate
+  // nothing (900 frames, the first included).
+  const WalkerRun run = walkerRun(Pose2{4.5, 4.5, 0.0}, 1, 900, true);
+  EXPECT_EQ(run.allocations, 0u);
+  EXPECT_EQ(run.phantoms, 0);
+  EXPECT_GE(run.visible, 60);
+  EXPECT_EQ(run.reported, run.visible);
 }
 
 }  // namespace

@@ -343,6 +343,28 @@ TEST(Protocol, StatusJsonCarriesTheBaseDriversCounters) {
   EXPECT_TRUE(statusJson(s, 0)["base"]["fault"].is_null());
 }
 
+TEST(Protocol, StatusJsonCarriesTheScannersCountsAndTheRosScansDropsByReason) {
+  Status s = filledStatus();
+  EXPECT_TRUE(statusJson(s, 0)["scanner"].is_null()) << "no scanner: null";
+  s.scanner.enabled = true;
+  s.scanner.backend = "ros";
+  s.scanner.scans_used = 900;
+  s.scanner.scans_too_old = 7;
+  s.scanner.frames_without_scan = 2;
+  s.scanner.scan_points = 412;
+  const Json scanner = statusJson(s, 0)["scanner"];
+  EXPECT_EQ(scanner, Json({{"backend", "ros"}, {"scans_used", 900}, {"scans_too_old", 7}, {"frames_without_scan", 2},
+                           {"scan_points", 412}}));
+  s.ros.enabled = true;
+  s.ros.scans_in = 1000;
+  s.ros.scans_dropped = 10;
+  s.ros.scans_dropped_by = {1, 2, 3, 4};
+  const Json scans = statusJson(s, 0)["ros"]["scans"];
+  EXPECT_EQ(scans["in"], 1000);
+  EXPECT_EQ(scans["dropped"], 10);
+  EXPECT_EQ(scans["dropped_by"], Json({{"beams", 1}, {"geometry", 2}, {"sweep", 3}, {"stamp", 4}}));
+}
+
 TEST(Protocol, StatusJsonCarriesTheBaseThreadsTimingAndCommandToWire) {
   Status s = filledStatus();
   s.base_thread.counters.cycles = 5000;

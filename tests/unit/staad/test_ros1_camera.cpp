@@ -1,8 +1,11 @@
 // camera.backend ros's ROS 1 transport against a real ROS master (rosmaster --core on a free
 // port of its own): images and camera_info published on their topics reach the sink with the
 // latest camera_info and the camera's pose from tf, interpolated at the image's stamp; an
-// image whose transform is missing is still offered, without a pose. C++17 (ROS 1 headers).
+// image whose transform is missing is still offered, without a pose. scanner.backend ros's
+// likewise: a sensor_msgs/LaserScan reaches its sink as a plain view, every field as sent.
+// C++17 (ROS 1 headers).
 #include "app/staad/ros/ros1_camera.hpp"
+#include "app/staad/ros/ros1_scanner.hpp"
 
 #include "child_process.hpp"
 #include "temp_dir.hpp"
@@ -11,6 +14,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/LaserScan.h>
 #include <tf2_ros/buffer.h>
 
 #include <gtest/gtest.h>
@@ -21,6 +25,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -286,6 +291,105 @@ TEST_F(Ros1Camera, RejectsBadTopics) {
   topics.queue_size = 0;
   EXPECT_THROW(Ros1CameraInput(node, tf, topics, sink), std::invalid_argument);
   EXPECT_EQ(Ros1CameraTopics{}.image_topic, "/hsrb/head_rgbd_sensor/depth_registered/image_rect_raw");
+}
+
+// What the scanner's transport offered, copied in the spinner's thread.
+struct OfferedScan {
+  hal::LaserScanView view;  // its ranges pointer is stale after offer(): see `ranges`
+  std::vector<float> ranges;
+  std::int64_t arrival_mono_ns = 0;
+};
+
+class RecordingScanSink final : public hal::LaserScanSink {
+ public:
+  void offer(const hal::LaserScanView& scan, std::int64_t arrival_mono_ns) override {
+    OfferedScan o;
+    o.view = scan;
+    o.ranges.assign(scan.ranges, scan.ranges + scan.count);
+    o.arrival_mono_ns = arrival_mono_ns;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    offered_.push_back(std::move(o));
+  }
+  std::size_t count() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return offered_.size();
+  }
+  OfferedScan at(std::size_t i) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return offered_.at(i);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<OfferedScan> offered_;
+};
+
+TEST_F(Ros1Camera, TheBaseScannersLaserScansReachTheSinkAsPlainViews) {
+  ros::NodeHandle node;
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  RecordingScanSink sink;
+  Ros1ScannerTopics topics;
+  topics.topic = "/test/base_scan";
+  Ros1ScannerInput input(node, topics, sink);
+  ros::Publisher pub = node.advertise<sensor_msgs::LaserScan>(topics.topic, 1);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }));
+
+  // The HSR-B's: 270 degrees in 1,081 beams; a NaN and an inf among the ranges.
+  sensor_msgs::LaserScan scan;
+  scan.header.stamp = ros::Time(2000, 5'000'000);
+  scan.header.frame_id = "base_range_sensor_link";  // not looked up: the config's mount places it
+  scan.angle_min = -2.356194f;
+  scan.angle_max = 2.356194f;
+  scan.angle_increment = 0.004363323f;
+  scan.time_increment = 1.7e-5f;
+  scan.scan_time = 0.025f;
+  scan.range_min = 0.05f;
+  scan.range_max = 20.0f;
+  scan.ranges.resize(1081);
+  for (std::size_t i = 0; i < scan.ranges.size(); ++i) scan.ranges[i] = 1.0f + 0.002f * static_cast<float>(i);
+  scan.ranges[3] = std::numeric_limits<float>::quiet_NaN();
+  scan.ranges[4] = std::numeric_limits<float>::infinity();
+  scan.intensities.assign(1081, 100.0f);
+  pub.publish(scan);
+  ASSERT_TRUE(waitFor([&] { return sink.count() == 1; }));
+
+  const OfferedScan o = sink.at(0);
+  EXPECT_EQ(o.view.stamp_ns, static_cast<std::int64_t>(scan.header.stamp.toNSec()));
+  EXPECT_GT(o.view.received_ns, 0);
+  EXPECT_GT(o.arrival_mono_ns, 0);
+  EXPECT_EQ(o.view.angle_min, scan.angle_min);
+  EXPECT_EQ(o.view.angle_max, scan.angle_max);
+  EXPECT_EQ(o.view.angle_increment, scan.angle_increment);
+  EXPECT_EQ(o.view.range_min, scan.range_min);
+  EXPECT_EQ(o.view.range_max, scan.range_max);
+  EXPECT_EQ(o.view.count, 1081u);
+  ASSERT_EQ(o.ranges.size(), 1081u);
+  EXPECT_TRUE(std::isnan(o.ranges[3]));
+  EXPECT_TRUE(std::isinf(o.ranges[4]));
+  EXPECT_EQ(o.ranges[0], 1.0f);
+  EXPECT_EQ(o.ranges[1080], scan.ranges[1080]);
+
+  // An empty scan is offered as it is (the sink drops it, counted).
+  scan.header.stamp = ros::Time(2000, 30'000'000);
+  scan.ranges.clear();
+  pub.publish(scan);
+  ASSERT_TRUE(waitFor([&] { return sink.count() == 2; }));
+  EXPECT_EQ(sink.at(1).view.count, 0u);
+  EXPECT_EQ(input.scans(), 2u);
+  spinner.stop();
+}
+
+TEST_F(Ros1Camera, TheScannerRejectsBadTopics) {
+  ros::NodeHandle node;
+  RecordingScanSink sink;
+  Ros1ScannerTopics topics;
+  topics.topic = "";
+  EXPECT_THROW(Ros1ScannerInput(node, topics, sink), std::invalid_argument);
+  topics = Ros1ScannerTopics{};
+  topics.queue_size = 0;
+  EXPECT_THROW(Ros1ScannerInput(node, topics, sink), std::invalid_argument);
+  EXPECT_EQ(Ros1ScannerTopics{}.topic, "/hsrb/base_scan");
 }
 
 }  // namespace

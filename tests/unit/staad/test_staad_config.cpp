@@ -548,6 +548,7 @@ TEST_F(ConfigFiles, TheRosLinkDefaultsToTheHsrsRos1Names) {
   EXPECT_EQ(t.map_topic, "/map");
   EXPECT_EQ(t.map_frame, "map");
   EXPECT_EQ(t.base_frame, "base_footprint");
+  EXPECT_EQ(t.scan_topic, "/hsrb/base_scan");
   EXPECT_DOUBLE_EQ(c.ros.occupied_thresh, 0.65);
   EXPECT_DOUBLE_EQ(c.ros.free_thresh, 0.196);
   // Without any of it the link is off.
@@ -563,6 +564,7 @@ TEST_F(ConfigFiles, TheRosSectionTakesTopicsFramesAndRates) {
   localization: {source: tf, tf_hz: 20}
   goals: {action: "", simple_goal: /goal}
   map: {topic: /static_map, wait_s: 5, occupied_thresh: 0.7, free_thresh: 0.2, simplify_m: 0}
+  scanner: {topic: /base_scan}
   markers: {rate_hz: 0}
 )"));
   const ros::TransportConfig& t = c.ros.transport;
@@ -582,6 +584,7 @@ TEST_F(ConfigFiles, TheRosSectionTakesTopicsFramesAndRates) {
   EXPECT_DOUBLE_EQ(c.ros.occupied_thresh, 0.7);
   EXPECT_DOUBLE_EQ(c.ros.simplify_m, 0.0);
   EXPECT_DOUBLE_EQ(c.ros.markers_hz, 0.0);
+  EXPECT_EQ(t.scan_topic, "/base_scan");
 }
 
 TEST_F(ConfigFiles, BadRosValuesAreNamedWithTheirKeyAndLine) {
@@ -600,6 +603,8 @@ TEST_F(ConfigFiles, BadRosValuesAreNamedWithTheirKeyAndLine) {
       {"{map: {wait_s: -1}}", {"ros.map.wait_s"}},
       {"{markers: {rate_hz: -2}}", {"ros.markers.rate_hz"}},
       {"{topics: {}}", {"ros.topics", "unknown key"}},
+      {"{scanner: {topic: \"\"}}", {"ros.scanner.topic", "ROS name"}},
+      {"{scanner: {image: /scan}}", {"ros.scanner.image", "unknown key", "topic"}},
   };
   for (const Case& c : cases) {
     const std::string text = kRosConfig + "ros: " + c.section + "\n";
@@ -623,6 +628,20 @@ TEST(ShippedConfig, TheHsrRosConfigLoads) {
   EXPECT_EQ(c.obstacles, ObstacleSource::kNone);
   EXPECT_EQ(c.ros.transport.cmd_vel_topic, "/hsrb/command_velocity");
   EXPECT_EQ(c.ros.transport.localization_topic, "/global_pose");
+  // Its scanner (the base's, over ROS) is in place for obstacles: depth; unused with none.
+  EXPECT_EQ(c.ros.transport.scan_topic, "/hsrb/base_scan");
+  EXPECT_EQ(c.scanner.backend, ScannerBackend::kNone);
+  std::string text = readFile(test::sourceDir() / "config/staad-hsr-ros.yaml");
+  text.replace(text.find("\nobstacles: none"), 16, "\nobstacles: depth\ncamera: {backend: ros}");
+  const fs::path dir = fs::temp_directory_path() / ("staad-hsr-ros-" + std::to_string(::getpid()));
+  fs::create_directories(dir / "robots");
+  fs::copy_file(test::sourceDir() / "config/robots/hsr.yaml", dir / "robots/hsr.yaml", fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "staad.yaml") << text;
+  const DaemonConfig depth = loadDaemonConfig(dir / "staad.yaml");
+  fs::remove_all(dir);
+  EXPECT_EQ(depth.scanner.backend, ScannerBackend::kRos);
+  EXPECT_DOUBLE_EQ(depth.scanner.mount.x, 0.1675);
+  EXPECT_DOUBLE_EQ(depth.scanner.mount.z, 0.1844);
 }
 
 TEST_F(SocketCanConfig, HalFromTheCommandLineIsAppliedBeforeItsSectionIsRead) {

@@ -1,8 +1,9 @@
 // The ROS 1 transport (roscpp from Debian 12): C++17, the only translation unit besides the
-// camera's that includes ROS headers (transport.hpp says why).
+// camera's and the scanner's that includes ROS headers (transport.hpp says why).
 #include "app/staad/ros/transport.hpp"
 
 #include "app/staad/ros/ros1_camera.hpp"
+#include "app/staad/ros/ros1_scanner.hpp"
 
 #include <actionlib/server/simple_action_server.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -107,6 +108,7 @@ class Ros1Transport final : public Transport {
   ::ros::Timer tf_timer_;
   std::unique_ptr<MoveBaseServer> action_;
   std::unique_ptr<Ros1CameraInput> camera_;
+  std::unique_ptr<Ros1ScannerInput> scanner_;
 
   std::mutex events_mutex_;  // the callback threads and the service thread; never real-time
   std::deque<GoalEvent> events_;
@@ -183,6 +185,13 @@ Ros1Transport::Ros1Transport(const TransportConfig& config, const TransportSinks
     topics.queue_size = 1;
     camera_ = std::make_unique<Ros1CameraInput>(camera_nh, *tf_, topics, *sinks.camera);
   }
+  if (!config.scan_topic.empty() && sinks.scanner != nullptr) {
+    // On the main spinner: a scan's callback is a copy of its ranges, it never waits (no tf).
+    Ros1ScannerTopics topics;
+    topics.topic = config.scan_topic;
+    topics.queue_size = 1;
+    scanner_ = std::make_unique<Ros1ScannerInput>(*nh_, topics, *sinks.scanner);
+  }
   markers_pub_ = nh_->advertise<visualization_msgs::MarkerArray>(config.markers_topic, 2);
   diagnostics_pub_ = nh_->advertise<diagnostic_msgs::DiagnosticArray>(config.diagnostics_topic, 2);
 
@@ -200,6 +209,7 @@ Ros1Transport::~Ros1Transport() {
   }
   if (action_) action_->shutdown();
   camera_.reset();
+  scanner_.reset();
   action_.reset();
   tf_listener_.reset();
   nh_.reset();

@@ -6,9 +6,9 @@
 //
 // Threads: the transport runs roscpp's own normal-priority threads (callbacks, the map on a
 // queue of its own so that a long import never delays odometry). Odometry and localization
-// go to the base backend's BaseSink, depth images to the camera's DepthImageSink, maps to
-// the MapSink, all from those threads. publishTwist() is called by the daemon's publisher
-// thread; the rest by the service thread.
+// go to the base backend's BaseSink, depth images to the camera's DepthImageSink, laser
+// scans to the scanner's LaserScanSink, maps to the MapSink, all from those threads.
+// publishTwist() is called by the daemon's publisher thread; the rest by the service thread.
 
 #include "hal/ros/base_port.hpp"
 
@@ -22,6 +22,7 @@
 
 namespace staa::hal {
 class DepthImageSink;  // hal/ros/depth_image.hpp
+class LaserScanSink;   // hal/ros/laser_scan_port.hpp
 }  // namespace staa::hal
 
 namespace staa::staad::ros {
@@ -61,6 +62,8 @@ struct TransportConfig {
   std::string image_topic = "/hsrb/head_rgbd_sensor/depth_registered/image_rect_raw";
   std::string camera_info_topic = "/hsrb/head_rgbd_sensor/depth_registered/camera_info";
   double camera_tf_timeout_s = 0.05;
+  // scanner.backend: ros (cleared: not subscribed). The HSR-B's base scanner.
+  std::string scan_topic = "/hsrb/base_scan";
   // RViz and diagnostics.
   std::string markers_topic = "/staad/markers";
   std::string diagnostics_topic = "/diagnostics";
@@ -128,6 +131,7 @@ struct TransportCounters {
 struct TransportSinks {
   hal::BaseSink* base = nullptr;           // config.base
   hal::DepthImageSink* camera = nullptr;   // config.image_topic
+  hal::LaserScanSink* scanner = nullptr;   // config.scan_topic
   MapSink* map = nullptr;                  // config.map_topic
 };
 
