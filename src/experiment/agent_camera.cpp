@@ -86,7 +86,7 @@ hal::CameraMount cameraMount(const DepthCameraProfile& c) {
   return hal::CameraMount{c.x, c.y, c.z, c.roll, c.pitch, c.yaw};
 }
 
-DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile) {
+DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile, bool with_scanner) {
   const DepthCameraProfile& c = cameraOf(profile);
   DepthObstaclesConfig p;
   p.min_depth_m = c.min_range_m;
@@ -100,6 +100,7 @@ DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile) {
   // A new track's velocity is unknown (0, give or take half the top speed): its outline grows
   // by what that covers in a third of a second, shrinking as the velocity settles.
   p.uncertainty_horizon_s = 1.0 / 3.0;
+  if (with_scanner && profile.has_scanner) p.scan_range_m = std::min(kScanRangeM, profile.scanner.max_range_m);
   return p;
 }
 

@@ -61,7 +61,12 @@ hal::CameraMount cameraMount(const DepthCameraProfile& camera);
 // with the camera's range, and the others' dynamics from the profile (every agent has the
 // same): their top speed and acceleration bound the filter, their body's depth hides behind
 // the face the camera sees.
-DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile);
+// with_scanner (--obstacles depth+scan): the scan's returns used up to kScanRangeM.
+DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile, bool with_scanner = false);
+// Agents closing at 2 m/s each come 8 m nearer in 2 s: about what STAA* needs to get out of
+// the way of one that does not (a ghost). Perception's grid grows with it (the cost is in
+// docs/results.md).
+inline constexpr double kScanRangeM = 8.0;
 
 class AgentCamera {
  public:

@@ -174,7 +174,7 @@ void validateExperimentSpec(const ExperimentSpec& spec) {
     if (!spec.robot.has_camera) fail("obstacles 'depth' needs a robot profile with a camera ('" + spec.robot.name + "' has none)");
     try {
       (void)agentPerceptionConfig(spec.robot);
-      validateDepthObstaclesConfig(spec.perception.value_or(agentPerceptionConfig(spec.robot)),
+      validateDepthObstaclesConfig(spec.perception.value_or(agentPerceptionConfig(spec.robot, spec.robot.has_scanner)),
                                    std::hypot(spec.robot.camera.x, spec.robot.camera.y));
     } catch (const std::invalid_argument& e) {
       fail(std::string("the depth camera's perception: ") + e.what());
@@ -436,6 +436,8 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   }
   if (std::find(spec.obstacles.begin(), spec.obstacles.end(), ObstacleSource::kDepthScan) != spec.obstacles.end()) {
     s["scanner"] = scannerJson(spec.robot.scanner);
+    // What depth+scan runs use beyond the camera's perception (the rest is spec.perception).
+    s["scanner"]["scan_range_m"] = spec.perception.value_or(agentPerceptionConfig(spec.robot, true)).scan_range_m;
   }
   s["runs"] = spec.runs;
   s["duration_s"] = spec.duration_s;

@@ -213,7 +213,8 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   MultiWorld world(map, robot);
   const bool by_camera = perceived(options.obstacles);
   const DepthObstaclesConfig perception =
-      by_camera ? options.perception.value_or(agentPerceptionConfig(robot)) : DepthObstaclesConfig{};
+      by_camera ? options.perception.value_or(agentPerceptionConfig(robot, options.obstacles == ObstacleSource::kDepthScan))
+                : DepthObstaclesConfig{};
   std::vector<std::unique_ptr<SimAgent>> agents;
   agents.reserve(n);
   // Every agent plans against all the others: the capacity is raised to them if it is lower.

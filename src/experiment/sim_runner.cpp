@@ -43,7 +43,8 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   std::vector<double> seen_turn_rates(hal::ObstacleFrame::kMaxObstacles);
   std::size_t seen = 0;  // obstacles in the seen_ spans this cycle
   if (perceived(options.obstacles)) {
-    DepthObstaclesConfig perception = agentPerceptionConfig(scenario.robot);
+    DepthObstaclesConfig perception =
+        agentPerceptionConfig(scenario.robot, options.obstacles == ObstacleSource::kDepthScan);
     double fastest = 0.0;
     for (std::size_t i = 0; i < world.moverCount(); ++i) fastest = std::max(fastest, world.mover(i).speed);
     perception.max_speed_mps = std::max(perception.max_speed_mps, 1.25 * fastest);

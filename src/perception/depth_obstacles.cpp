@@ -76,11 +76,13 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_o
   if (!std::isfinite(c.max_height_m) || !(c.max_height_m > c.min_height_m)) {
     throw io::FieldError(kOwner, "max_height_m", "> min_height_m (" + number(c.min_height_m) + " m)", c.max_height_m);
   }
+  require("scan_range_m", c.scan_range_m, Range::atLeast(0.0, "m"));
   require("cell_m", c.cell_m, Range::above(0.0, "m"));
-  const double reach = c.max_range_m + camera_offset_m;
+  const double reach = std::max(c.max_range_m, c.scan_range_m) + camera_offset_m;
   if (reach / c.cell_m > kMaxRangeCells) {
     throw io::FieldError(kOwner, "cell_m",
-                         "large enough for max_range_m " + number(c.max_range_m) + " m (+ the camera's " + number(camera_offset_m) +
+                         "large enough for max_range_m " + number(c.max_range_m) + " m and scan_range_m " +
+                             number(c.scan_range_m) + " m (+ the camera's " + number(camera_offset_m) +
                              " m offset): at most 998 cells of range",
                          c.cell_m);
   }
@@ -135,7 +137,7 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   fillRays(camera_.rotation(), camera_.position(), rays_);
   // The grid reaches max_range_m from the camera wherever the camera sits on the robot
   // (within kMaxGridSide: validated above).
-  const double reach = config_.max_range_m + cameraOffset(mount);
+  const double reach = std::max(config_.max_range_m, config_.scan_range_m) + cameraOffset(mount);
   n_ = 2 * (static_cast<int>(std::ceil(reach / config_.cell_m)) + 1);
   link_ = static_cast<int>(std::floor(config_.cluster_gap_m / config_.cell_m + 1e-9));
   const auto cells = static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_);
@@ -301,7 +303,7 @@ bool DepthObstacleDetector::scanSees(const Vec2& p) const {
   const double distance = d.norm();
   // Written so that NaN (a place or scan far beyond any sense) is "not seen".
   if (!(distance >= scan.range_min + kRangeMargin &&
-        distance <= std::min(scan.range_max, config_.max_range_m) - kRangeMargin)) {
+        distance <= std::min(scan.range_max, std::max(config_.max_range_m, config_.scan_range_m)) - kRangeMargin)) {
     return false;
   }
   // The bearing from beam 0, wrapped to the sweep's side of it.

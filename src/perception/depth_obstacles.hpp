@@ -61,8 +61,13 @@ struct DepthObstaclesConfig {
   // floor and its noise, above it ceiling and lamps.
   double min_height_m = 0.05;
   double max_height_m = 1.8;
-  // Occupancy grid cells (m); the grid spans max_range_m (plus the mount's offset) around the
-  // robot in every direction.
+  // How far from the base a scan's returns are used (m, ScanInput): the grid spans the larger
+  // of this and max_range_m. 0: max_range_m. A planar scanner reads far beyond a depth
+  // camera's useful range (a UST-20LX: 20 m), and agents closing at 4 m/s need seconds of
+  // warning, not the camera's one.
+  double scan_range_m = 0.0;
+  // Occupancy grid cells (m); the grid spans max_range_m (or scan_range_m, plus the mount's
+  // offset) around the robot in every direction.
   double cell_m = 0.1;
   // A cell is occupied with at least this many points (isolated noisy pixels are not).
   int min_points_per_cell = 3;
