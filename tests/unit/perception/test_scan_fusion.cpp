@@ -17,6 +17,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace staa {
@@ -124,6 +126,32 @@ TEST(ScanFusion, APersonWalkingPastBesideTheRobotStaysSeenWithItsVelocity) {
   }
   EXPECT_GE(beside, 33);               // 1.2 m at 1 m/s, 30 frames a second
   EXPECT_EQ(beside_camera_seen, 0);    // the camera alone saw none of it
+}
+
+TEST(ScanFusion, ScanRangeSetsHowFarTheScanIsUsed) {
+  // A person standing 6 m down the corridor ahead, beyond the 4.5 m the camera's depth is used
+  // to; the scan (20 m) reaches it, the grid only with scan_range_m.
+  Scene s({test::boxMover({10.5, 5.5}, {10.5, 5.5}, 0.0)});
+  DepthObstaclesConfig far;
+  far.scan_range_m = 8.0;
+  DepthObstacleDetector wide(test::officeMap(), s.camera.intrinsics(), s.camera.mount(), far);
+  hal::ObstacleFrame out;
+  for (int k = 0; k < 5; ++k) {
+    s.step();
+    wide.process(*s.frame, s.world.robot().pose, out, ScanInput{s.scan.get(), s.scanner.config().mount, s.world.robot().pose});
+  }
+  EXPECT_EQ(s.fused.count, 0u);  // the default grid: 4.5 m
+  ASSERT_EQ(out.count, 1u);
+  EXPECT_NEAR(centroidOf(out.obstacles[0]).x(), 10.3, 0.15);  // its west face
+  EXPECT_NEAR(centroidOf(out.obstacles[0]).y(), 5.5, 0.15);
+  // A negative range is refused naming the field.
+  far.scan_range_m = -1.0;
+  try {
+    validateDepthObstaclesConfig(far);
+    FAIL() << "scan_range_m -1 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("scan_range_m"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ScanFusion, AScanThatFailsItsChecksChangesNothing) {
