@@ -14,6 +14,10 @@
 //       depth images (all "no reading") with camera_info (the Xtion's nominal K) on the HSR's
 //       topics, and the static tf base_footprint -> head_rgbd_sensor_rgb_frame (1 m up, an
 //       optical frame looking ahead)
+//   laser-scans KIND SECONDS [--rate 40] [--range 2.0]
+//       the HSR-B's base scans (270 degrees in 1,081 beams, every beam returning at --range m)
+//       on /hsrb/base_scan, stamped now; KIND good, or a bad one: empty (no ranges),
+//       nan-increment, back (each stamp 10 s before the previous)
 //   static-tf PARENT CHILD X Y YAW SECONDS    a static transform, kept up for SECONDS
 //   diagnostics [--topic /diagnostics] [--timeout 10] [--until KEY=VALUE]
 //       the first DiagnosticArray of staad (whose KEY is VALUE): {"level":L,"message":...,"values":{...}}
@@ -29,6 +33,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/LaserScan.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -253,6 +258,39 @@ int depthImages(ros::NodeHandle& n, const Args& a) {
   return 0;
 }
 
+int laserScans(ros::NodeHandle& n, const Args& a) {
+  if (a.positional.size() != 2) return 2;
+  const std::string kind = a.positional[0];
+  if (kind != "good" && kind != "empty" && kind != "nan-increment" && kind != "back") return 2;
+  const double seconds = std::strtod(a.positional[1].c_str(), nullptr);
+  ros::Publisher scans = n.advertise<sensor_msgs::LaserScan>("/hsrb/base_scan", 2);
+  if (!waitSubscriber(scans, 10.0)) return 3;
+  sensor_msgs::LaserScan scan;
+  scan.header.frame_id = "base_range_sensor_link";
+  scan.angle_min = -2.356194f;
+  scan.angle_max = 2.356194f;
+  scan.angle_increment = 0.004363323f;
+  scan.scan_time = 0.025f;
+  scan.range_min = 0.05f;
+  scan.range_max = 20.0f;
+  scan.ranges.assign(kind == "empty" ? 0 : 1081, static_cast<float>(a.number("--range", 2.0)));
+  if (kind == "nan-increment") scan.angle_increment = std::numeric_limits<float>::quiet_NaN();
+  const double rate = a.number("--rate", 40.0);
+  int sent = 0;
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  ros::Time back = ros::Time::now();
+  while (ros::ok() && ros::WallTime::now() < end) {
+    back -= ros::Duration(10.0);
+    scan.header.stamp = kind == "back" ? back : ros::Time::now();
+    scans.publish(scan);
+    ++sent;
+    ros::WallDuration(1.0 / rate).sleep();
+  }
+  ros::WallDuration(0.3).sleep();
+  std::printf("{\"sent\":%d}\n", sent);
+  return 0;
+}
+
 int staticTf(const Args& a) {
   if (a.positional.size() != 6) return 2;
   tf2_ros::StaticTransformBroadcaster tf;
@@ -358,6 +396,7 @@ int main(int argc, char** argv) {
   if (c == "markers") return markers(n, args);
   if (c == "diagnostics") return diagnostics(n, args);
   if (c == "depth-images") return depthImages(n, args);
+  if (c == "laser-scans") return laserScans(n, args);
   if (c == "static-tf") return staticTf(args);
   std::fprintf(stderr, "staa-test-nav-client: unknown command '%s'\n", c.c_str());
   return 2;

@@ -424,6 +424,59 @@ TEST_F(StaadOverRos, DepthImagesOverRosFeedPerceptionAndBadOnesAreCountedAndDrop
   EXPECT_EQ(bad["rt_allocations"], 0);
 }
 
+// scanner.backend: ros through staad: the base's LaserScans on /hsrb/base_scan are perceived
+// with the depth frames (the status counts them and their returns); bad scans are counted by
+// reason and dropped, and the frames go on alone; nothing is allocated in real time.
+TEST_F(StaadOverRos, LaserScansFeedPerceptionWithTheFramesAndBadOnesAreDropped) {
+  startMap({depotYaml().string()});
+  startBase();
+  std::string config = readFile(writeConfig());
+  config.replace(config.find("obstacles: none"), 15, "obstacles: depth\ncamera: {backend: ros}\nscanner: {backend: ros}");
+  const fs::path file = dir_ / "scanner.yaml";
+  std::ofstream(file) << config;
+  startStaad(file);
+  const auto before = pollStatus([](const Json& s) { return !s["scanner"].is_null(); }, milliseconds(3000));
+  ASSERT_TRUE(before);
+  EXPECT_EQ((*before)["scanner"]["backend"], "ros");
+  EXPECT_EQ((*before)["scanner"]["scans_used"], 0);
+
+  // Frames and scans flowing together: each frame is perceived with the newest scan (every
+  // beam returning 1.5 m away: points in the grid).
+  {
+    RosProcess images = master_->spawn("images", {kNav, "depth-images", "16UC1", "640", "480", "4"});
+    RosProcess scans = master_->spawn("scans", {kNav, "laser-scans", "good", "4", "--range", "1.5"});
+    const auto used = pollStatus(
+        [](const Json& s) { return s["scanner"]["scans_used"].get<int>() >= 30 && s["fault"].is_null(); },
+        milliseconds(4000));
+    ASSERT_TRUE(used) << images.err() << scans.err();
+    EXPECT_GT((*used)["scanner"]["scan_points"].get<int>(), 0);
+    EXPECT_GT((*used)["ros"]["scans"]["in"].get<int>(), 30);
+    EXPECT_EQ((*used)["ros"]["scans"]["dropped"], 0);
+    EXPECT_EQ(images.wait(milliseconds(10'000)), 0) << images.err();
+    EXPECT_EQ(scans.wait(milliseconds(10'000)), 0) << scans.err();
+  }
+  const Json good = *status();
+  // Frames and scans started together: at most a few frames came before the first scan.
+  EXPECT_LE(good["scanner"]["frames_without_scan"].get<int>(), 5) << "scans came within a moment of the frames";
+
+  // Bad scans beside good frames: each counted under its reason, none used.
+  RosProcess images = master_->spawn("images-2", {kNav, "depth-images", "16UC1", "640", "480", "3"});
+  nav({"laser-scans", "empty", "0.5"});
+  nav({"laser-scans", "nan-increment", "0.5"});
+  nav({"laser-scans", "back", "0.5"});
+  EXPECT_EQ(images.wait(milliseconds(10'000)), 0) << images.err();
+  const Json bad = *status();
+  const Json& by = bad["ros"]["scans"]["dropped_by"];
+  EXPECT_GE(by["beams"].get<int>(), 10);
+  EXPECT_GE(by["geometry"].get<int>(), 10);
+  EXPECT_GE(by["stamp"].get<int>(), 10) << "each going back from the good scans' stamps";
+  EXPECT_EQ(by["sweep"], 0);
+  EXPECT_EQ(bad["ros"]["scans"]["dropped"].get<int>(),
+            by["beams"].get<int>() + by["geometry"].get<int>() + by["stamp"].get<int>());
+  EXPECT_GT(bad["scanner"]["scans_too_old"].get<int>(), 0) << "the frames went on without a recent scan";
+  EXPECT_EQ(bad["rt_allocations"], 0);
+}
+
 TEST_F(StaadOverRos, RoslaunchStartsStaadWithTheLaunchFile) {
   // The package as installed: package.xml, the launch file and staad beside them.
   const fs::path pkg = dir_ / "pkgs/staa";
