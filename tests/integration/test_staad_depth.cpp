@@ -1,5 +1,7 @@
-// staad with `obstacles: depth`, run for real: it drives to a goal on rendered depth frames;
-// `camera.backend: openni2` without a device exits 3 naming camera.backend.
+// staad with `obstacles: depth`, run for real: it drives to a goal on rendered depth frames
+// (also with the simulated base scanner beside the camera, every frame perceived with its
+// scan, nothing allocated in real time); `camera.backend: openni2` without a device exits 3
+// naming camera.backend.
 #if defined(STAA_HAVE_OPENNI2)
 #include "hal/openni2/openni2_camera.hpp"
 #endif
@@ -45,7 +47,7 @@ class StaadDepth : public ::testing::Test {
     fs::remove_all(dir_, ec);
   }
 
-  fs::path writeConfig(const std::string& camera) const {
+  fs::path writeConfig(const std::string& camera, const std::string& extra = "") const {
     const fs::path src = test::sourceDir();
     std::string y = "format: staad-config/1\n";
     y += "robot: " + (src / "config/robots/paper-agent.yaml").string() + "\n";
@@ -58,6 +60,7 @@ class StaadDepth : public ::testing::Test {
     y += "threads: {control: {priority: 80}, base: {priority: 85}, perception: {priority: 70}}\n";
     y += "socket: {path: " + (dir_ / "staad.sock").string() + "}\n";
     y += "memory: {heap_prefault_mb: 16}\n";
+    y += extra;
     const fs::path p = dir_ / "staad.yaml";
     std::ofstream(p) << y;
     return p;
@@ -112,6 +115,46 @@ TEST_F(StaadDepth, DrivesToTheGoalOnRenderedDepthFrames) {
   EXPECT_THAT(err, HasSubstr("; 0 rt allocations"));
   std::cout << "reached the goal 6 m away on depth frames in " << trip_s << " s; "
             << err.substr(err.find("[perception]")).substr(0, err.substr(err.find("[perception]")).find('\n')) << "\n";
+}
+
+TEST_F(StaadDepth, DrivesToTheGoalWithTheSimScannerBesideTheCamera) {
+  Child staad({STAAD_EXE, "--config", writeConfig("{backend: sim}", "scanner: {backend: sim}\n").string()},
+              dir_ / "staad.out", dir_ / "staad.err");
+  ASSERT_TRUE(staad.started());
+  const auto up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!fs::exists(dir_ / "staad.sock") && std::chrono::steady_clock::now() < up) {
+    ASSERT_FALSE(staad.wait(std::chrono::milliseconds(20)).has_value()) << "staad exited";
+  }
+  ASSERT_TRUE(fs::exists(dir_ / "staad.sock"));
+  const auto [code, out] = staactl({"goal", "10.5", "4.5", "0", "--wait", "--timeout", "40"}, std::chrono::seconds(45));
+  ASSERT_TRUE(code.has_value()) << "staactl did not return";
+  EXPECT_EQ(*code, 0) << out << readFile(dir_ / "staactl.err");
+
+  const auto [status_code, json] = staactl({"status", "--json"}, std::chrono::seconds(5));
+  ASSERT_EQ(status_code, std::optional<int>(0));
+  const auto s = nlohmann::json::parse(json, nullptr, false);
+  ASSERT_TRUE(s.is_object()) << json;
+  EXPECT_EQ(s["state"], "reached");
+  EXPECT_EQ(s["rt_allocations"], 0) << json;
+  EXPECT_EQ(s["blocked_cycles"], 0) << json;
+  const auto& scanner = s["scanner"];
+  ASSERT_TRUE(scanner.is_object()) << json;
+  EXPECT_EQ(scanner["backend"], "sim");
+  EXPECT_GT(scanner["scans_used"].get<int>(), 100) << "a scan with every frame: " << json;
+  EXPECT_EQ(scanner["scans_too_old"], 0) << "the sim scan is taken with its frame";
+  EXPECT_EQ(scanner["frames_without_scan"], 0);
+  EXPECT_GT(scanner["scan_points"].get<int>(), 0) << "the corridor's walls are in the scan: " << json;
+  EXPECT_TRUE(s["ros"].is_null());
+
+  staad.signal(SIGTERM);
+  ASSERT_EQ(staad.wait(std::chrono::seconds(5)), std::optional<int>(0));
+  const std::string err = readFile(dir_ / "staad.err");
+  EXPECT_THAT(err, HasSubstr("; 0 rt allocations"));
+  EXPECT_THAT(err, HasSubstr(" perceived with a scan, 0 without"));
+  for (const char* line : {"[perception]", "staad: scanner:"}) {
+    const std::string from = err.substr(err.find(line));
+    std::cout << from.substr(0, from.find('\n')) << "\n";
+  }
 }
 
 TEST_F(StaadDepth, Openni2WithoutADeviceExits3NamingCameraBackend) {
