@@ -57,11 +57,7 @@ hal::SimScanConfig scannerConfig(const RobotProfile& profile, std::uint64_t seed
   const ScannerProfile& p = profile.scanner;
   hal::SimScanConfig c;
   c.mount = hal::ScanMount{p.x, p.y, p.z, p.yaw};
-  const double half = 0.5 * p.fov_deg * kPi / 180.0;
-  c.angle_min = -half;
-  // A full turn's last beam would repeat its first: one increment short of it.
-  c.angle_max = p.fov_deg >= 360.0 ? half - 2.0 * half / p.beams : half;
-  c.beams = p.beams;
+  c.centredSweep(p.fov_deg, p.beams);
   c.range_min = p.min_range_m;
   c.range_max = p.max_range_m;
   c.noise_m = p.noise_m;

@@ -49,8 +49,20 @@ double originDistance(const Vec2& a, const Vec2& e) {
 
 }  // namespace
 
+StaticPrisms::StaticPrisms(const PolygonMap& map) {
+  for (const Polygon& o : map.obstacles) {
+    entries.push_back(Entry{static_cast<std::uint32_t>(points.size()), static_cast<std::uint32_t>(o.size()), boundingBox(o), true});
+    points.insert(points.end(), o.begin(), o.end());
+  }
+  if (map.bounds) {
+    const Box& b = *map.bounds;
+    entries.push_back(Entry{static_cast<std::uint32_t>(points.size()), 4, b, false});
+    points.insert(points.end(), {b.min, Vec2(b.max.x(), b.min.y()), b.max, Vec2(b.min.x(), b.max.y())});
+  }
+}
+
 DepthRenderer::DepthRenderer(const PolygonMap& map, const SimDepthConfig& config)
-    : config_(validated(config)), camera_(config.intrinsics, config.mount), rng_(config.seed) {
+    : config_(validated(config)), camera_(config.intrinsics, config.mount), static_(map), rng_(config.seed) {
   // Every pixel's ray and its azimuth bin (from the camera's yaw, so the field of view does
   // not wrap around +-pi for a camera looking backwards).
   yaw0_ = config_.mount.yaw;
@@ -77,19 +89,8 @@ DepthRenderer::DepthRenderer(const PolygonMap& map, const SimDepthConfig& config
     if (rays_[k].inv_horizontal > 0.0F) rays_[k].bin = static_cast<std::uint16_t>(binOf(azimuth[k]));
   }
 
-  // The static prisms: the map's obstacles and its bounds (a box seen from inside).
-  for (const Polygon& o : map.obstacles) {
-    static_polygons_.push_back(StaticPolygon{static_cast<std::uint32_t>(static_points_.size()),
-                                             static_cast<std::uint32_t>(o.size()), boundingBox(o), true});
-    static_points_.insert(static_points_.end(), o.begin(), o.end());
-  }
-  if (map.bounds) {
-    const Box& b = *map.bounds;
-    static_polygons_.push_back(StaticPolygon{static_cast<std::uint32_t>(static_points_.size()), 4, b, false});
-    static_points_.insert(static_points_.end(), {b.min, Vec2(b.max.x(), b.min.y()), b.max, Vec2(b.min.x(), b.max.y())});
-  }
-  edges_.reserve(static_points_.size() + kMaxMoverEdges);
-  prisms_.reserve(static_polygons_.size() + kMaxMoverEdges / 3);
+  edges_.reserve(static_.points.size() + kMaxMoverEdges);
+  prisms_.reserve(static_.entries.size() + kMaxMoverEdges / 3);
   low_prisms_.reserve(prisms_.capacity());
   prism_mover_.reserve(prisms_.capacity());
   bin_items_.resize(8 * edges_.capacity() + 16 * kBins);
@@ -173,15 +174,14 @@ void DepthRenderer::render(const Pose2& robot, std::span<const PrismView> movers
   prisms_.clear();
   low_prisms_.clear();
   prism_mover_.clear();
-  for (const StaticPolygon& sp : static_polygons_) {
+  for (const StaticPrisms::Entry& sp : static_.entries) {
     const double dx = std::max({sp.box.min.x() - camera.x(), 0.0, camera.x() - sp.box.max.x()});
     const double dy = std::max({sp.box.min.y() - camera.y(), 0.0, camera.y() - sp.box.max.y()});
     // The bounds are seen from inside: near whenever the camera is within range of a side.
     const bool near = sp.solid ? dx * dx + dy * dy <= range * range : true;
     if (!near) continue;
     prism_mover_.push_back(kNoMover);
-    addPrism(std::span<const Vec2>(static_points_.data() + sp.first, sp.count), config_.wall_height_m, sp.solid,
-             camera, c, s);
+    addPrism(static_.pointsOf(sp), config_.wall_height_m, sp.solid, camera, c, s);
   }
   for (std::size_t i = 0; i < movers.size(); ++i) {
     const PrismView& m = movers[i];

@@ -59,6 +59,21 @@ struct PrismView {
   double height_m = 1.7;
 };
 
+// The map's obstacles and its bounds as the simulated sensors see them: every polygon's
+// points in one array, each with its bounding box (to skip what is out of range) and whether
+// it is solid (the bounds are a box seen from inside, with no top).
+struct StaticPrisms {
+  struct Entry {
+    std::uint32_t first = 0, count = 0;  // in points
+    Box box;                             // map frame
+    bool solid = true;
+  };
+  explicit StaticPrisms(const PolygonMap& map);
+  std::span<const Vec2> pointsOf(const Entry& e) const { return {points.data() + e.first, e.count}; }
+  std::vector<Vec2> points;
+  std::vector<Entry> entries;
+};
+
 class DepthRenderer {
  public:
   static constexpr std::size_t kMaxMoverEdges = 1024;   // movers' edges per frame (the rest unseen)
@@ -98,12 +113,6 @@ class DepthRenderer {
     double height = 0.0;
     Box box;  // camera-relative
   };
-  struct StaticPolygon {
-    std::uint32_t first = 0, count = 0;  // in static_points_
-    Box box;                             // map frame
-    bool solid = true;                   // false: the bounds (seen from inside, no top)
-  };
-
   void addPrism(std::span<const Vec2> points_map, double height, bool solid, const Vec2& camera, double c, double s);
   void binEdge(Edge& edge) const;
   int binOf(double relative_azimuth) const;
@@ -113,8 +122,7 @@ class DepthRenderer {
   double yaw0_ = 0.0;                  // azimuths are measured from the camera's yaw
   double fov_min_ = 0.0, bin_width_ = 1.0;
   std::vector<PixelRay> rays_;         // per pixel (all 640 x 480; unrendered ones unused)
-  std::vector<Vec2> static_points_;
-  std::vector<StaticPolygon> static_polygons_;
+  StaticPrisms static_;
   // Per frame.
   std::vector<Edge> edges_;
   std::vector<Prism> prisms_;

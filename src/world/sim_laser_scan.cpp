@@ -37,6 +37,7 @@ const SimScanConfig& validated(const SimScanConfig& c) {
 ScanRenderer::ScanRenderer(const PolygonMap& map, const SimScanConfig& config)
     : config_(validated(config)),
       increment_((config.angle_max - config.angle_min) / (config.beams - 1)),
+      static_(map),
       range_(static_cast<std::size_t>(config.beams), 0.0),
       local_(static_cast<std::size_t>(config.beams), Vec2::Zero()),
       direction_(static_cast<std::size_t>(config.beams), Vec2::Zero()),
@@ -44,17 +45,6 @@ ScanRenderer::ScanRenderer(const PolygonMap& map, const SimScanConfig& config)
   for (std::size_t i = 0; i < local_.size(); ++i) {
     const double bearing = config_.mount.yaw + config_.angle_min + increment_ * static_cast<double>(i);
     local_[i] = Vec2(std::cos(bearing), std::sin(bearing));
-  }
-  for (const Polygon& o : map.obstacles) {
-    if (o.size() < 2) continue;
-    static_polygons_.push_back(StaticPolygon{static_cast<std::uint32_t>(static_points_.size()),
-                                             static_cast<std::uint32_t>(o.size()), boundingBox(o), true});
-    static_points_.insert(static_points_.end(), o.begin(), o.end());
-  }
-  if (map.bounds) {
-    const Box& b = *map.bounds;
-    static_polygons_.push_back(StaticPolygon{static_cast<std::uint32_t>(static_points_.size()), 4, b, false});
-    static_points_.insert(static_points_.end(), {b.min, Vec2(b.max.x(), b.min.y()), b.max, Vec2(b.min.x(), b.max.y())});
   }
 }
 
@@ -100,12 +90,12 @@ void ScanRenderer::render(const Pose2& robot, std::span<const PrismView> movers,
     direction_[i] = Vec2(c * local_[i].x() - s * local_[i].y(), s * local_[i].x() + c * local_[i].y());
   }
   const double reach = config_.range_max;
-  for (const StaticPolygon& sp : static_polygons_) {
+  for (const StaticPrisms::Entry& sp : static_.entries) {
     const double dx = std::max({sp.box.min.x() - sensor.x(), 0.0, sensor.x() - sp.box.max.x()});
     const double dy = std::max({sp.box.min.y() - sensor.y(), 0.0, sensor.y() - sp.box.max.y()});
     if (sp.solid && dx * dx + dy * dy > reach * reach) continue;
-    const Vec2* p = static_points_.data() + sp.first;
-    for (std::uint32_t k = 0; k < sp.count; ++k) castEdge(p[k], p[(k + 1) % sp.count], sensor, zero_bearing);
+    const std::span<const Vec2> p = static_.pointsOf(sp);
+    for (std::size_t k = 0; k < p.size(); ++k) castEdge(p[k], p[(k + 1) % p.size()], sensor, zero_bearing);
   }
   for (const PrismView& m : movers) {
     if (m.shape.size() < 3 || m.shape.size() > kMaxMoverVertices || !(m.height_m > config_.mount.z)) continue;

@@ -27,6 +27,15 @@ struct SimScanConfig {
   double noise_m = 0.01;    // range noise, standard deviation (m)
   double dropout = 0.0;     // fraction of the beams with no return, at random
   std::uint64_t seed = 1;
+
+  // `beams` over a sweep of fov_deg centred on the mount's yaw (a full turn's last beam one
+  // increment short of its first, which it would repeat).
+  void centredSweep(double fov_deg, int beam_count) {
+    const double half = 0.5 * fov_deg * kPi / 180.0;
+    angle_min = -half;
+    angle_max = fov_deg >= 360.0 ? half - 2.0 * half / beam_count : half;
+    beams = beam_count;
+  }
 };
 
 class ScanRenderer {
@@ -49,13 +58,7 @@ class ScanRenderer {
 
   SimScanConfig config_;
   double increment_ = 0.0;
-  std::vector<Vec2> static_points_;
-  struct StaticPolygon {
-    std::uint32_t first = 0, count = 0;  // in static_points_
-    Box box;
-    bool solid = true;  // false: the bounds (seen from inside)
-  };
-  std::vector<StaticPolygon> static_polygons_;
+  StaticPrisms static_;
   std::vector<double> range_;  // per beam, this frame: the nearest hit (range_max + 1: none)
   std::vector<Vec2> local_;      // per beam: its direction in the base frame
   std::vector<Vec2> direction_;  // ... in the map frame, this frame
