@@ -45,11 +45,7 @@ hal::SimDepthConfig simDepthConfig(const CameraConfig& camera, std::uint64_t see
 hal::SimScanConfig simScanConfig(const ScannerConfig& scanner, std::uint64_t seed) {
   hal::SimScanConfig c;
   c.mount = scanner.mount;
-  const double half = 0.5 * scanner.fov_deg * kPi / 180.0;
-  c.angle_min = -half;
-  // A full turn's last beam would repeat its first: one increment short of it.
-  c.angle_max = scanner.fov_deg >= 360.0 ? half - 2.0 * half / scanner.beams : half;
-  c.beams = scanner.beams;
+  c.centredSweep(scanner.fov_deg, scanner.beams);  // a full turn one increment short of it
   c.range_min = scanner.range_min_m;
   c.range_max = scanner.range_max_m;
   c.noise_m = scanner.noise_m;
