@@ -251,7 +251,7 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
 void DepthObstacleDetector::addScan(const ScanInput& in, DepthObstaclesStats& stats) {
   const hal::LaserScan& scan = *in.scan;
   // Cheap guards for a scan that skipped hal::scanProblem: nothing is read past its beams.
-  if (scan.count < 2 || scan.count > hal::LaserScan::kMaxBeams || !std::isfinite(scan.angle_min) ||
+  if (scan.count < 1 || scan.count > hal::LaserScan::kMaxBeams || !std::isfinite(scan.angle_min) ||
       !std::isfinite(scan.angle_increment) || scan.angle_increment == 0.0 || !std::isfinite(scan.range_max) ||
       !(scan.range_min >= 0.0) || !std::isfinite(in.robot.x) || !std::isfinite(in.robot.y) ||
       !std::isfinite(in.robot.theta) || !std::isfinite(in.mount.x) || !std::isfinite(in.mount.y) ||

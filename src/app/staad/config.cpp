@@ -146,7 +146,7 @@ void readBudget(const ConfigValue& root, DaemonConfig& config) {
 // pixel_stride.
 void readPerception(const ConfigValue& camera, CameraConfig& c) {
   const ConfigValue perception = camera.section(
-      "perception", {"stride", "min_depth_m", "max_range_m", "min_height_m", "max_height_m", "cell_m", "min_points_per_cell",
+      "perception", {"stride", "min_depth_m", "max_range_m", "scan_range_m", "min_height_m", "max_height_m", "cell_m", "min_points_per_cell",
                      "min_cluster_points", "cluster_gap_m", "static_margin_m", "max_vertices", "gate_m", "max_speed_mps",
                      "max_missed_frames"});
   DepthObstaclesConfig& p = c.perception;
@@ -159,6 +159,7 @@ void readPerception(const ConfigValue& camera, CameraConfig& c) {
   count("stride", p.pixel_stride);
   real("min_depth_m", p.min_depth_m);
   real("max_range_m", p.max_range_m);
+  real("scan_range_m", p.scan_range_m);
   real("min_height_m", p.min_height_m);
   real("max_height_m", p.max_height_m);
   real("cell_m", p.cell_m);

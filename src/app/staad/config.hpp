@@ -18,7 +18,7 @@
 //     intrinsics: {fx: 570.3, fy: 570.3, cx: 319.5, cy: 239.5}
 //     mount: {x: 0.0, y: 0.0, z: 1.0, roll: 0.0, pitch: 0.3, yaw: 0.0}  # rad; pitch > 0: down
 //     sim_noise_mm_per_m2: 1.5               # backend sim: depth noise (sigma per depth^2)
-//     perception: {stride: 4, min_depth_m: 0.45, max_range_m: 4.5, min_height_m: 0.05,
+//     perception: {stride: 4, min_depth_m: 0.45, max_range_m: 4.5, scan_range_m: 0, min_height_m: 0.05,
 //                  max_height_m: 1.8, cell_m: 0.1, min_points_per_cell: 3,
 //                  min_cluster_points: 8, cluster_gap_m: 0.3, static_margin_m: 0.15,
 //                  max_vertices: 16, gate_m: 0.5, max_speed_mps: 2.5, max_missed_frames: 5}

@@ -3,9 +3,8 @@
 // sensor in lockstep with the simulated world (a mover walking in front of the robot is
 // reported where it is and as fast as it walks, the walls are not reported, nothing is
 // allocated; with the base's scanner a mover beside the robot, out of the camera's view, is
-// seen, and a scan too far from the frame's stamp is not used); and the staad binary
-// with `obstacles: depth` (drives to a goal on rendered frames; `camera.backend: openni2`
-// without a device exits 3 naming camera.backend).
+// seen, and a scan too far from the frame's stamp is not used). The staad binary with
+// `obstacles: depth` is tests/integration/test_staad_depth.cpp's.
 #include "app/staad/config.hpp"
 #include "app/staad/depth_sensor.hpp"
 #include "geometry/polygon.hpp"
@@ -79,6 +78,7 @@ camera:
     stride: 4
     min_depth_m: 0.45
     max_range_m: 4.5
+    scan_range_m: 0
     min_height_m: 0.05
     max_height_m: 1.8
     cell_m: 0.1
@@ -155,6 +155,7 @@ TEST_F(CameraConfigFiles, ReadsEveryCameraKey) {
            {"stride: 4", "stride: 2"},
            {"min_depth_m: 0.45", "min_depth_m: 0.6"},
            {"max_range_m: 4.5", "max_range_m: 3.5"},
+           {"scan_range_m: 0", "scan_range_m: 8"},
            {"min_height_m: 0.05", "min_height_m: 0.08"},
            {"max_height_m: 1.8", "max_height_m: 1.5"},
            {"cell_m: 0.1", "cell_m: 0.08"},
@@ -189,6 +190,7 @@ TEST_F(CameraConfigFiles, ReadsEveryCameraKey) {
   EXPECT_EQ(p.pixel_stride, 2);
   EXPECT_DOUBLE_EQ(p.min_depth_m, 0.6);
   EXPECT_DOUBLE_EQ(p.max_range_m, 3.5);
+  EXPECT_DOUBLE_EQ(p.scan_range_m, 8.0);
   EXPECT_DOUBLE_EQ(p.min_height_m, 0.08);
   EXPECT_DOUBLE_EQ(p.max_height_m, 1.5);
   EXPECT_DOUBLE_EQ(p.cell_m, 0.08);
@@ -310,6 +312,7 @@ TEST_F(CameraConfigFiles, EveryBadCameraValueIsNamedWithItsKeyLineAndValue) {
       {"stride: 4", "strides: 4", {"camera.perception.strides", "unknown key", "stride, min_depth_m"}},
       {"min_depth_m: 0.45", "min_depth_m: -0.1", {"camera.perception.min_depth_m", ">= 0", "got -0.1"}},
       {"max_range_m: 4.5", "max_range_m: 0", {"camera.perception.max_range_m", "> 0", "got 0"}},
+      {"scan_range_m: 0", "scan_range_m: -2", {"camera.perception.scan_range_m", ">= 0", "got -2"}},
       {"min_height_m: 0.05", "min_height_m: low", {"camera.perception.min_height_m", "'low'"}},
       {"max_height_m: 1.8", "max_height_m: 0.01", {"camera.perception.max_height_m", "> min_height_m (0.05 m)", "got 0.01"}},
       {"cell_m: 0.1", "cell_m: -0.1", {"camera.perception.cell_m", "> 0", "got -0.1"}},
