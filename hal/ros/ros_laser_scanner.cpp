@@ -8,7 +8,7 @@
 namespace staa::hal {
 namespace {
 
-constexpr double kMaxAgeLimitS = 10.0;
+constexpr double kMaxScanAgeLimitS = 10.0;
 
 }  // namespace
 
@@ -25,7 +25,7 @@ const char* toString(RosScanDrop reason) {
 
 RosLaserScanner::RosLaserScanner(const RosLaserScannerConfig& config)
     : config_(config), scans_(std::make_unique<rt::TripleBuffer<LaserScan>>()) {
-  if (!(config.max_age_s >= 0.0 && config.max_age_s <= kMaxAgeLimitS)) {
+  if (!(config.max_age_s >= 0.0 && config.max_age_s <= kMaxScanAgeLimitS)) {
     throw std::invalid_argument("ros laser scanner: max_age_s must be in [0, 10] s, got " +
                                 std::to_string(config.max_age_s));
   }

@@ -30,7 +30,7 @@ while [ $# -gt 0 ]; do
 done
 
 ALL=(polygon_map ros_map_yaml pgm robot_profile scenario can_profile can_codec protocol daemon_config
-     depth_perception ros_depth_image)
+     depth_perception ros_depth_image ros_laser_scan)
 if [ -n "$ONLY" ]; then
   [[ " ${ALL[*]} " == *" $ONLY "* ]] || { echo "run.sh: no target '$ONLY' (targets: ${ALL[*]})" >&2; exit 2; }
   TARGETS=("$ONLY")
@@ -47,14 +47,14 @@ dict_of() {
     protocol) echo json.dict ;;
     pgm) echo pgm.dict ;;
     can_codec) echo can.dict ;;
-    depth_perception|ros_depth_image) echo depth.dict ;;
+    depth_perception|ros_depth_image|ros_laser_scan) echo depth.dict ;;
     *) echo yaml.dict ;;
   esac
 }
 max_len_of() {
   case "$1" in
     pgm) echo 16384 ;;  # the shared maps' images are larger: seeds, cut to this while fuzzing
-    depth_perception|ros_depth_image) echo 8192 ;;
+    depth_perception|ros_depth_image|ros_laser_scan) echo 8192 ;;
     protocol) echo 8192 ;;  # beyond kMaxRequestBytes
     *) echo 8192 ;;
   esac
