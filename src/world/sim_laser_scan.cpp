@@ -10,32 +10,32 @@
 namespace staa::hal {
 namespace {
 
-[[noreturn]] void bad(const char* field, double value, const char* rule) {
+[[noreturn]] void badScan(const char* field, double value, const char* rule) {
   throw std::invalid_argument(std::string("sim laser scanner: config.") + field + " must be " + rule + ", got " +
                               std::to_string(value));
 }
 
-const SimScanConfig& validated(const SimScanConfig& c) {
+const SimScanConfig& validatedScan(const SimScanConfig& c) {
   const auto finite = [](double v) { return std::isfinite(v); };
-  if (!finite(c.mount.x) || !finite(c.mount.y) || !finite(c.mount.yaw)) bad("mount", c.mount.x, "finite");
-  if (!(c.mount.z > 0.0) || !finite(c.mount.z)) bad("mount.z", c.mount.z, "finite and > 0 (m)");
+  if (!finite(c.mount.x) || !finite(c.mount.y) || !finite(c.mount.yaw)) badScan("mount", c.mount.x, "finite");
+  if (!(c.mount.z > 0.0) || !finite(c.mount.z)) badScan("mount.z", c.mount.z, "finite and > 0 (m)");
   if (c.beams < 2 || c.beams > static_cast<int>(LaserScan::kMaxBeams)) {
-    bad("beams", c.beams, "in 2..2048");
+    badScan("beams", c.beams, "in 2..2048");
   }
   if (!(c.angle_min >= -kPi && c.angle_max <= kPi && c.angle_max > c.angle_min)) {
-    bad("angle_max", c.angle_max, "> angle_min, both within [-pi, pi] (rad)");
+    badScan("angle_max", c.angle_max, "> angle_min, both within [-pi, pi] (rad)");
   }
-  if (!(c.range_min >= 0.0) || !finite(c.range_min)) bad("range_min", c.range_min, "finite and >= 0 (m)");
-  if (!(c.range_max > c.range_min) || !finite(c.range_max)) bad("range_max", c.range_max, "finite and > range_min (m)");
-  if (!(c.noise_m >= 0.0) || !finite(c.noise_m)) bad("noise_m", c.noise_m, "finite and >= 0 (m)");
-  if (!(c.dropout >= 0.0 && c.dropout < 1.0)) bad("dropout", c.dropout, "in [0, 1) (a fraction of the beams)");
+  if (!(c.range_min >= 0.0) || !finite(c.range_min)) badScan("range_min", c.range_min, "finite and >= 0 (m)");
+  if (!(c.range_max > c.range_min) || !finite(c.range_max)) badScan("range_max", c.range_max, "finite and > range_min (m)");
+  if (!(c.noise_m >= 0.0) || !finite(c.noise_m)) badScan("noise_m", c.noise_m, "finite and >= 0 (m)");
+  if (!(c.dropout >= 0.0 && c.dropout < 1.0)) badScan("dropout", c.dropout, "in [0, 1) (a fraction of the beams)");
   return c;
 }
 
 }  // namespace
 
 ScanRenderer::ScanRenderer(const PolygonMap& map, const SimScanConfig& config)
-    : config_(validated(config)),
+    : config_(validatedScan(config)),
       increment_((config.angle_max - config.angle_min) / (config.beams - 1)),
       static_(map),
       range_(static_cast<std::size_t>(config.beams), 0.0),
