@@ -132,6 +132,30 @@ class CameraConfigFiles : public ::testing::Test {
   DaemonConfig load(const std::string& text, const std::string& name = "staad.yaml") const {
     return loadDaemonConfig(write(name, text));
   }
+  // config/staad.yaml with its commented block from `header` to the next blank line
+  // uncommented (`lines`: how many), `obstacles: sim` replaced by `obstacles`, and the files it
+  // names copied beside it as "shipped/": load(text, "shipped/staad.yaml") reads it.
+  std::string shippedWithBlock(const std::string& header, const std::string& obstacles, int& lines) const {
+    std::istringstream in(readFile(test::sourceDir() / "config/staad.yaml"));
+    std::string text, line;
+    bool block = false;
+    lines = 0;
+    while (std::getline(in, line)) {
+      if (line == header) block = true;
+      if (block && line.empty()) block = false;
+      if (block && (line == header || line.rfind("#   ", 0) == 0)) {
+        line = line.substr(2);
+        ++lines;
+      }
+      if (line == "obstacles: sim") line = obstacles;
+      text += line + "\n";
+    }
+    for (const char* f : {"robots/hsr.yaml", "maps/office.yaml"}) {
+      fs::create_directories((dir_ / "shipped" / f).parent_path());
+      fs::copy_file(test::sourceDir() / "config" / f, dir_ / "shipped" / f);
+    }
+    return text;
+  }
   std::string loadError(const std::string& text) const {
     try {
       load(text);
@@ -249,25 +273,9 @@ obstacles: depth
 
 TEST_F(CameraConfigFiles, ShippedConfigsCommentedCameraBlockLoadsWithItsValues) {
   // config/staad.yaml documents the section as comments ("# camera:" to the blank line).
-  std::istringstream in(readFile(test::sourceDir() / "config/staad.yaml"));
-  std::string text, line;
-  bool block = false;
   int lines = 0;
-  while (std::getline(in, line)) {
-    if (line == "# camera:") block = true;
-    if (block && line.empty()) block = false;
-    if (block && (line == "# camera:" || line.rfind("#   ", 0) == 0)) {
-      line = line.substr(2);
-      ++lines;
-    }
-    if (line == "obstacles: sim") line = "obstacles: depth";
-    text += line + "\n";
-  }
+  const std::string text = shippedWithBlock("# camera:", "obstacles: depth", lines);
   ASSERT_GE(lines, 6) << "no commented camera block in config/staad.yaml";
-  for (const char* f : {"robots/hsr.yaml", "maps/office.yaml"}) {
-    fs::create_directories((dir_ / "shipped" / f).parent_path());
-    fs::copy_file(test::sourceDir() / "config" / f, dir_ / "shipped" / f);
-  }
   const DaemonConfig c = load(text, "shipped/staad.yaml");
   EXPECT_EQ(c.obstacles, ObstacleSource::kDepth);
   EXPECT_EQ(c.camera.backend, CameraBackend::kSim);
@@ -411,25 +419,9 @@ TEST_F(CameraConfigFiles, WithoutAScannerSectionTheCameraIsAloneAndTheDefaultsAr
 
 TEST_F(CameraConfigFiles, ShippedConfigsCommentedScannerBlockLoadsWithItsValues) {
   // config/staad.yaml documents the section as comments ("# scanner:" to the blank line).
-  std::istringstream in(readFile(test::sourceDir() / "config/staad.yaml"));
-  std::string text, line;
-  bool block = false;
   int lines = 0;
-  while (std::getline(in, line)) {
-    if (line == "# scanner:") block = true;
-    if (block && line.empty()) block = false;
-    if (block && (line == "# scanner:" || line.rfind("#   ", 0) == 0)) {
-      line = line.substr(2);
-      ++lines;
-    }
-    if (line == "obstacles: sim") line = "obstacles: depth\ncamera: {backend: sim}";
-    text += line + "\n";
-  }
+  const std::string text = shippedWithBlock("# scanner:", "obstacles: depth\ncamera: {backend: sim}", lines);
   ASSERT_GE(lines, 8) << "no commented scanner block in config/staad.yaml";
-  for (const char* f : {"robots/hsr.yaml", "maps/office.yaml"}) {
-    fs::create_directories((dir_ / "shipped" / f).parent_path());
-    fs::copy_file(test::sourceDir() / "config" / f, dir_ / "shipped" / f);
-  }
   const ScannerConfig s = load(text, "shipped/staad.yaml").scanner;
   const ScannerConfig defaults;
   EXPECT_EQ(s.backend, ScannerBackend::kSim);
