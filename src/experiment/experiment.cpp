@@ -171,7 +171,9 @@ void validateExperimentSpec(const ExperimentSpec& spec) {
     fail("obstacles 'depth+scan' needs a robot profile with a scanner ('" + spec.robot.name + "' has none)");
   }
   if (any_perceived) {
-    if (!spec.robot.has_camera) fail("obstacles 'depth' needs a robot profile with a camera ('" + spec.robot.name + "' has none)");
+    if (!spec.robot.has_camera) {
+      fail("obstacles 'depth' and 'depth+scan' need a robot profile with a camera ('" + spec.robot.name + "' has none)");
+    }
     try {
       (void)agentPerceptionConfig(spec.robot);
       validateDepthObstaclesConfig(spec.perception.value_or(agentPerceptionConfig(spec.robot, spec.robot.has_scanner)),

@@ -57,9 +57,10 @@ void ScanRenderer::castEdge(const Vec2& a_map, const Vec2& b_map, const Vec2& se
   const Vec2 e = b - a;
   // Bearings from beam 0, in [0, 2 pi): the segment covers [from, from + span], span < pi.
   const double two_pi = 2.0 * kPi;
-  double from = std::atan2(a.y(), a.x()) - zero_bearing;
+  const double bearing_a = std::atan2(a.y(), a.x());
+  double from = bearing_a - zero_bearing;
   from -= two_pi * std::floor(from / two_pi);
-  double span = std::atan2(b.y(), b.x()) - std::atan2(a.y(), a.x());
+  double span = std::atan2(b.y(), b.x()) - bearing_a;
   span -= two_pi * std::floor(span / two_pi);
   const int n = config_.beams;
   const double cross_ae = a.x() * e.y() - a.y() * e.x();
