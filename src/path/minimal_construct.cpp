@@ -56,6 +56,7 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   open_scan_.reserve(max_nodes);
   open_scan_valid_ = false;
   closed_.reserve(max_nodes);
+  start_candidates_.reserve(max_nodes);
   closed_corner_.reserve(max_nodes);
   path_.reserve(max_nodes + 2);
   blockers_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
@@ -539,7 +540,20 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   target_ = addTargetNode(start);
   // The start stays out of the heap until the search needs it there: the test below excludes
   // it anyway, and the heap pops in a strict order (f, g, id), so where it sat changes no pop.
-  for (const std::int32_t c : closed_) relaxOutsideHeap(c, target_);
+  // Its parent is the closed node with the least g + |c - start| (the first in closing order
+  // among equals), as relaxOutsideHeap over closed_ picks it. The candidates are kept: while
+  // the loop below runs, closed_ does not change, and each blocked edge only removes its
+  // parent, so the next parent is the next candidate (a heap, not another scan of closed_:
+  // a start walled in by the obstacles tries hundreds of parents).
+  start_candidates_.clear();
+  start_candidates_heap_ = false;
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    const std::int32_t c = closed_[i];
+    if (!canFollow(c, target_)) continue;
+    const Node& a = nodes_[static_cast<std::size_t>(c)];
+    start_candidates_.push_back(StartCandidate{a.g + (nodes_[kTarget].pos - a.pos).norm(), static_cast<std::uint32_t>(i)});
+  }
+  adoptStartParent();
   // The common case, without touching the heap: the new start's best connection to the
   // tree is at least as short as anything still open (true keys, computed by a scan) and
   // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
@@ -561,7 +575,20 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
     // The search checked the first start edge again after this test (counted as it did);
     // later tests stand for the search's own checks.
     if (first) ++edge_checks_;
-    blockedEdgeInto(target_, start_blockers_, use_dynamic, /*in_heap=*/false);
+    // blockedEdgeInto(target_, ..., in_heap = false) with the kept candidates.
+    markEdgeBlocked(nodes_[kTarget].parent, target_);
+    for (std::size_t i = 0; i < start_blockers_; ++i) discoverPolygon(blockers_[i], use_dynamic);
+    if (!start_candidates_heap_) {
+      std::make_heap(start_candidates_.begin(), start_candidates_.end(), StartCandidate::later);
+      start_candidates_heap_ = true;
+    }
+    std::pop_heap(start_candidates_.begin(), start_candidates_.end(), StartCandidate::later);
+    start_candidates_.pop_back();
+    Node& t = nodes_[kTarget];
+    t.state = kUnseen;
+    t.parent = kNone;
+    t.g = kInf;
+    adoptStartParent();
   }
   if (nodes_[static_cast<std::size_t>(target_)].state == kOpen) heapPush(target_);
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
@@ -572,6 +599,23 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   for (std::size_t i = heap_.size() / 2; i-- > 0;) heapDown(i);
   key_anchor_ = target_pos_;
   return false;
+}
+
+void MinimalConstruct::adoptStartParent() {
+  if (start_candidates_.empty()) return;
+  // The heap's top, or before it is built the least candidate by a scan (most starts take
+  // their first parent).
+  const StartCandidate* best = &start_candidates_.front();
+  if (!start_candidates_heap_) {
+    for (const StartCandidate& c : start_candidates_) {
+      if (StartCandidate::later(*best, c)) best = &c;
+    }
+  }
+  Node& t = nodes_[kTarget];
+  t.g = best->g;
+  t.f = best->g;  // + |start - start|
+  t.parent = closed_[best->closed_index];
+  t.state = kOpen;
 }
 
 void MinimalConstruct::plantTree(const Vec2& start, const Vec2& goal, bool use_dynamic) {

@@ -181,6 +181,8 @@ class MinimalConstruct {
   bool reattachStart(const Vec2& start, bool use_dynamic, const Deadline& deadline, std::uint32_t& until_check,
                      Result& result);
   StartStep startIsNextPop(bool use_dynamic, Result& result);
+  // The start's parent: the least of start_candidates_ (none: the start stays unseen).
+  void adoptStartParent();
   void plantTree(const Vec2& start, const Vec2& goal, bool use_dynamic);
   // `until_check`: pops before the first deadline check (0: at once).
   Status search(bool use_dynamic, const Deadline& deadline, std::uint32_t until_check, Result& result);
@@ -274,6 +276,17 @@ class MinimalConstruct {
   std::vector<Vec2> path_;
   // Open-addressing set of blocked (node, node) edges, cleared in O(1) by a generation stamp.
   std::vector<std::int32_t> target_blocked_;  // nodes whose edge to the current start is blocked
+  // reattachStart's parents for the start: closed nodes it can follow, by g + distance.
+  struct StartCandidate {
+    double g = 0.0;
+    std::uint32_t closed_index = 0;
+    // The heap's order: least g first, then the earlier closed node (relax keeps the first).
+    static bool later(const StartCandidate& a, const StartCandidate& b) {
+      return a.g > b.g || (a.g == b.g && a.closed_index > b.closed_index);
+    }
+  };
+  std::vector<StartCandidate> start_candidates_;
+  bool start_candidates_heap_ = false;
   std::vector<std::uint64_t> blocked_keys_;
   std::vector<std::uint32_t> blocked_gen_;
   std::uint32_t blocked_generation_ = 1;

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
 #include <random>
 
 namespace staa {
@@ -160,6 +161,64 @@ TEST(MinimalConstruct, MatchesBruteForceVisibilityGraphOnRandomMaps) {
   }
   EXPECT_GT(found, 2000);
   EXPECT_GT(none, 40);  // the closed rooms really separate start and goal
+}
+
+// A start walled in by a ring of posts with one gap, the goal's tree already grown outside:
+// the kept tree offers the start dozens of parents whose edges the ring blocks before the one
+// through the gap (reattachStart takes them in order from its candidates). Every answer is the
+// exact shortest path, as a fresh search's, and a ring without a gap gives no path.
+TEST(MinimalConstruct, AWalledInStartTriesTheKeptTreesParentsInOrder) {
+  std::vector<Polygon> posts;
+  const Vec2 centre{0.0, 0.0};
+  const double ring = 2.0, half = 0.22;
+  for (int k = 0; k < 36; ++k) {
+    if (k == 9) continue;  // the gap, towards +y
+    const double a = 2.0 * std::numbers::pi * k / 36.0;
+    const Vec2 c = centre + ring * Vec2(std::cos(a), std::sin(a));  // posts 0.35 m apart, 0.44 m wide: they overlap
+    posts.push_back({{c.x() - half, c.y() - half}, {c.x() + half, c.y() - half}, {c.x() + half, c.y() + half}, {c.x() - half, c.y() + half}});
+  }
+  // Clutter outside the ring: more closed nodes in the kept tree.
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const double x = -6.0 + 2.0 * i, y = -6.0 + 1.5 * j;
+      posts.push_back({{x, y}, {x + 0.4, y}, {x + 0.4, y + 0.3}, {x, y + 0.3}});
+    }
+  }
+  const Vec2 goal{0.5, -8.0};
+  MinimalConstruct kept = makeSearch(posts);
+  // Grow the goal's tree from outside first: from far corners, so most of it is closed.
+  for (const Vec2& s : {Vec2(-8.0, 6.0), Vec2(8.0, 6.0), Vec2(0.0, 6.0)}) {
+    ASSERT_EQ(kept.query(s, goal, false).status, MinimalConstruct::Status::kFound);
+  }
+  std::size_t most_checks = 0;
+  for (const Vec2& s : {Vec2(0.0, 0.0), Vec2(0.7, -0.9), Vec2(-1.1, 0.3), Vec2(0.4, 1.2), Vec2(-0.2, -1.4)}) {
+    const auto r = kept.query(s, goal, false);
+    ASSERT_EQ(r.status, MinimalConstruct::Status::kFound) << s.transpose();
+    MinimalConstruct fresh = makeSearch(posts);
+    const auto f = fresh.query(s, goal, false);
+    ASSERT_EQ(f.status, MinimalConstruct::Status::kFound);
+    const auto ref = test::referenceShortestPath(s, goal, posts);
+    ASSERT_TRUE(ref.has_value());
+    EXPECT_NEAR(r.length, *ref, 1e-9) << s.transpose();
+    EXPECT_NEAR(f.length, *ref, 1e-9) << s.transpose();
+    // Out through the gap: the path passes y > 1.5 before it turns south.
+    double top = -1e9;
+    for (const Vec2& p : r.path) top = std::max(top, p.y());
+    EXPECT_GT(top, 1.5) << s.transpose();
+    for (std::size_t i = 1; i < r.path.size(); ++i) EXPECT_TRUE(test::referenceSegmentFree(r.path[i - 1], r.path[i], posts));
+    most_checks = std::max<std::size_t>(most_checks, r.edge_checks);
+  }
+  EXPECT_GT(most_checks, 10u);  // blocked parents were really tried
+  // The gap closed: no path, from the kept tree as from a fresh one.
+  const double a = 2.0 * std::numbers::pi * 9 / 36.0;
+  const Vec2 c = centre + ring * Vec2(std::cos(a), std::sin(a));
+  posts.push_back({{c.x() - half, c.y() - half}, {c.x() + half, c.y() - half}, {c.x() + half, c.y() + half}, {c.x() - half, c.y() + half}});
+  MinimalConstruct closed = makeSearch(posts);
+  ASSERT_EQ(closed.query({0.0, 6.0}, goal, false).status, MinimalConstruct::Status::kFound);
+  for (const Vec2& s : {Vec2(0.0, 0.0), Vec2(0.7, -0.9), Vec2(-1.1, 0.3)}) {
+    EXPECT_EQ(closed.query(s, goal, false).status, MinimalConstruct::Status::kNoPath) << s.transpose();
+  }
+  EXPECT_EQ(closed.query({-8.0, 6.0}, goal, false).status, MinimalConstruct::Status::kFound);
 }
 
 }  // namespace
