@@ -35,6 +35,16 @@ const ControlConfig& checked(const ControlConfig& config) {
     throw std::invalid_argument("max_moving_obstacles must be 1.." + std::to_string(kMaxMovingObstacleCapacity) +
                                 ", got " + std::to_string(config.max_moving_obstacles));
   }
+  const BlindCornerConfig& b = config.blind_corners;
+  const auto bad = [](const char* key, double v, const char* want) {
+    throw std::invalid_argument(std::string("blind_corners.") + key + " must be " + want + ", got " + std::to_string(v));
+  };
+  if (!(b.reaction_s >= 0.0 && b.reaction_s <= 5.0)) bad("reaction_s", b.reaction_s, "0..5 s");
+  if (!(b.decel >= 0.0 && b.decel <= 100.0)) bad("decel", b.decel, "0..100 m/s^2 (0: the robot's a_max)");
+  if (!(b.clearance_m >= 0.0 && b.clearance_m <= 10.0)) bad("clearance_m", b.clearance_m, "0..10 m (0: the circumradius)");
+  if (!(b.min_speed >= 0.0 && b.min_speed <= 100.0)) bad("min_speed", b.min_speed, "0..100 m/s");
+  if (!(b.range_m > 0.0 && b.range_m <= 100.0)) bad("range_m", b.range_m, "in (0, 100] m");
+  if (!(b.lateral_m >= 0.0 && b.lateral_m <= 100.0)) bad("lateral_m", b.lateral_m, "0..100 m");
   return config;
 }
 constexpr std::size_t kHeldPathCapacity = 4096;
@@ -69,6 +79,9 @@ ControlCycle::ControlCycle(const PolygonMap& map, const RobotProfile& robot, con
       staa_(staaFor(config.staa, inflation_, dynamic_inflation_, local_inflation_ + config.path.arc_tolerance_m), robot,
             local_obstacles_, config.local, config.max_moving_obstacles),
       controller_(&staa_),
+      blind_corners_(path_.realObstacles(), config.blind_corners,
+                     config.blind_corners.clearance_m > 0.0 ? config.blind_corners.clearance_m : robot.circumradius(),
+                     config.blind_corners.decel > 0.0 ? config.blind_corners.decel : robot.limits.a_max),
       clock_(clock),
       empty_obstacles_(1),
       inflated_(config.max_moving_obstacles),
@@ -156,6 +169,22 @@ CycleOutput ControlCycle::command(const LocalCommand& cmd, CycleState state) con
   out.w_cmd = std::clamp(cmd.w, -lim.w_max, lim.w_max);
   out.state = state;
   return out;
+}
+
+void ControlCycle::limitForBlindCorners(const UnicycleState& robot, CycleOutput& out) const {
+  out.speed_cap = blind_corners_.speedCap(robot.pose()).speed;
+  if (!(out.v_cmd > out.speed_cap)) return;
+  // Down to the cap, but no faster than the robot brakes, and along the planned arc (w
+  // scaled with v) within the turn rate's own acceleration.
+  const MotionLimits& lim = robot_.limits;
+  const double period = 1.0 / config_.rate_hz;
+  const double v = std::min(out.v_cmd, std::max(out.speed_cap, robot.v - lim.a_max * period));
+  const double w = out.w_cmd * (v / out.v_cmd);
+  const double lo = std::max(-lim.w_max, robot.w - lim.b_max * period);
+  const double hi = std::min(lim.w_max, robot.w + lim.b_max * period);
+  out.w_cmd = lo <= hi ? std::clamp(w, lo, hi) : w;
+  out.v_cmd = v;
+  out.speed_capped = true;
 }
 
 LocalContext ControlCycle::context(const UnicycleState& robot, std::span<const Vec2> route,
@@ -280,6 +309,7 @@ CycleOutput ControlCycle::step(const CycleInputs& inputs, PlannerBudget budget) 
   const CycleOutput commanded = command(cmd, CycleState::kDriving);
   out.v_cmd = commanded.v_cmd;
   out.w_cmd = commanded.w_cmd;
+  if (blind_corners_.enabled()) limitForBlindCorners(robot, out);
   if (cmd.plan != nullptr) {
     out.plan = *cmd.plan;
     out.planned = true;

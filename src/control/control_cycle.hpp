@@ -13,6 +13,7 @@
 //
 // Everything is sized at construction; step() allocates nothing.
 
+#include "control/blind_corners.hpp"
 #include "control/local_controller.hpp"
 #include "control/staa_controller.hpp"
 #include "robot/robot_profile.hpp"
@@ -24,6 +25,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 namespace staa {
@@ -79,6 +81,9 @@ struct ControlConfig {
   // M' allows, or the cycle's time ran out on a cold query), the last path found is followed
   // for up to this long before the goal counts as unreachable.
   double path_hold_s = 1.0;
+  // The speed limit for blind corners (control/blind_corners.hpp): off by default; for a robot
+  // whose perception sees only its line of sight among agents as fast as itself.
+  BlindCornerConfig blind_corners;
 };
 
 struct CycleInputs {
@@ -104,6 +109,10 @@ struct CycleOutput {
   std::int64_t local_ns = 0;
   std::int64_t plan_ns = 0;
   std::size_t obstacles_dropped = 0;  // moving obstacles beyond the capacity, not planned against
+  // The blind-corner speed limit this cycle (infinite: none, or off) and whether it lowered
+  // the command.
+  double speed_cap = std::numeric_limits<double>::infinity();
+  bool speed_capped = false;
 };
 
 class ControlCycle {
@@ -170,6 +179,8 @@ class ControlCycle {
   bool routeNeedsPassage(std::span<const Vec2> route) const;
   // The command clamped to the robot's limits.
   CycleOutput command(const LocalCommand& cmd, CycleState state) const;
+  // The blind-corner limit applied to a driving command (speed_cap, speed_capped).
+  void limitForBlindCorners(const UnicycleState& robot, CycleOutput& out) const;
   LocalContext context(const UnicycleState& robot, std::span<const Vec2> route,
                        const DynamicObstacleSet& obstacles, const Pose2& goal, PlannerBudget budget) const;
 
@@ -184,6 +195,7 @@ class ControlCycle {
   LocalMap local_;
   StaaController staa_;
   LocalController* controller_;  // &staa_ or a baseline
+  BlindCorners blind_corners_;
   ClockFn clock_;
   DynamicObstacleSet empty_obstacles_;
   std::optional<Pose2> goal_;

@@ -225,7 +225,10 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     a->evaluated = options.mode == SimMode::kCooperative || i == 0;
     a->perceives = a->evaluated;  // ghosts are oblivious of everyone
     a->rng = SplitMix64(streamSeed(options.seed, 1 + i));
-    a->cycle = std::make_unique<ControlCycle>(map, robot, config);
+    // Ghosts drive blind on purpose: the blind-corner limit is the evaluated agents' only.
+    ControlConfig own = config;
+    own.blind_corners.enabled = config.blind_corners.enabled && a->evaluated;
+    a->cycle = std::make_unique<ControlCycle>(map, robot, own);
     if (!a->evaluated || options.controller == ControllerKind::kPd) {
       a->controller = std::make_unique<PdController>(robot);
     } else if (options.controller == ControllerKind::kDwa) {
@@ -269,7 +272,8 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     session.robot = robot;
     session.map = map;
     for (std::size_t i = 0; i < n; ++i) {
-      session.agents.push_back({static_cast<std::uint16_t>(i), agents[i]->controller ? agents[i]->controller->name() : "staa"});
+      session.agents.push_back({static_cast<std::uint16_t>(i), agents[i]->controller ? agents[i]->controller->name() : "staa",
+                                !agents[i]->evaluated});
     }
     record::RecordLimits limits;
     // Depth: what perception made of a frame (up to ObstacleFrame's obstacles and vertices).

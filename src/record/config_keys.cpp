@@ -26,6 +26,13 @@ void visitControlConfig(C& c, V&& v) {
   v("path_hold_s", c.path_hold_s);
   v("passages", c.passages);
   v("passage_margin_m", c.passage_margin_m);
+  v("blind_corners.enabled", c.blind_corners.enabled);
+  v("blind_corners.reaction_s", c.blind_corners.reaction_s);
+  v("blind_corners.decel", c.blind_corners.decel);
+  v("blind_corners.clearance_m", c.blind_corners.clearance_m);
+  v("blind_corners.min_speed", c.blind_corners.min_speed);
+  v("blind_corners.range_m", c.blind_corners.range_m);
+  v("blind_corners.lateral_m", c.blind_corners.lateral_m);
   auto& s = c.staa;
   v("staa.notches", s.notches);
   v("staa.dt", s.dt);

@@ -133,7 +133,13 @@ std::string agentPrefix(std::uint16_t agent, bool several) {
 
 KeyValues sessionMetadata(const Session& s) {
   json agents = json::array();
-  for (const AgentInfo& a : s.agents) agents.push_back({{"agent", a.agent}, {"controller", a.controller}});
+  for (const AgentInfo& a : s.agents) {
+    auto j = decltype(agents)::object();
+    j["agent"] = a.agent;
+    j["controller"] = a.controller;
+    if (a.ghost) j["ghost"] = true;  // absent: false (files before it have none)
+    agents.push_back(std::move(j));
+  }
   const std::string map_text = toYaml(s.map);
   return {
       {"format", kRecordingFormat},
@@ -190,7 +196,7 @@ Session sessionFromMetadata(const McapMetadata& m, const std::string& source) {
   }
   try {
     for (const auto& a : nlohmann::json::parse(need("agents"))) {
-      s.agents.push_back({a.at("agent").get<std::uint16_t>(), a.at("controller").get<std::string>()});
+      s.agents.push_back({a.at("agent").get<std::uint16_t>(), a.at("controller").get<std::string>(), a.value("ghost", false)});
     }
   } catch (const nlohmann::json::exception& e) {
     throw RecordError(source + ": the session's agents are not as written: " + e.what());

@@ -31,6 +31,7 @@ inline constexpr const char* kSessionMetadata = "staa.session";
 struct AgentInfo {
   std::uint16_t agent = 0;
   std::string controller = "staa";  // staa | dwa | pd
+  bool ghost = false;  // a ghost (staa-sim --mode ghost): drives without the blind-corner limit
 };
 
 // What one recording ran with, once per file.

@@ -136,8 +136,10 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options,
     if (options.agent && *options.agent != agent) continue;
     const auto info_it = std::find_if(session.agents.begin(), session.agents.end(),
                                       [&](const AgentInfo& a) { return a.agent == agent; });
-    const std::unique_ptr<LocalController> controller = controllerFor(*info_it, session.robot, config);
-    auto cycle = std::make_unique<ControlCycle>(session.map, session.robot, config);
+    ControlConfig own = config;
+    if (info_it->ghost) own.blind_corners.enabled = false;  // as the simulator built the ghost's cycle
+    const std::unique_ptr<LocalController> controller = controllerFor(*info_it, session.robot, own);
+    auto cycle = std::make_unique<ControlCycle>(session.map, session.robot, own);
     cycle->setLocalController(controller.get());
     DynamicObstacleSet obstacles(cycle->obstacleCapacity());
     std::vector<PolygonView> views;
@@ -174,7 +176,7 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options,
         continue;
       }
       if (r.flags & kNewCycle) {
-        cycle = std::make_unique<ControlCycle>(session.map, session.robot, config);
+        cycle = std::make_unique<ControlCycle>(session.map, session.robot, own);
         cycle->setLocalController(controller.get());
       }
       if (r.flags & kGoalSet) r.has_goal ? cycle->setGoal(r.goal) : cycle->clearGoal();

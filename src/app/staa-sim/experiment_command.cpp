@@ -141,6 +141,11 @@ void addOptions(cli::CommandLine& cl, Args& a) {
                              "on or off: STAA* computes h when a state is popped, not when it is generated "
                              "(StaaConfig::lazy_heuristic)"),
               std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, lazy_heuristic);
+  bool& blind_corners = s.control.blind_corners.enabled;
+  cli::choice(app.add_option("--blind-corners", blind_corners,
+                             "on or off: every agent's control cycle limits its speed at the map's blind corners "
+                             "(ControlConfig::blind_corners)"),
+              std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, blind_corners);
   app.add_option("--seed", s.seed, "Base seed of the runs")
       ->transform(cli::count("a seed", 0, std::numeric_limits<std::uint64_t>::max() - 100000))
       ->capture_default_str();

@@ -147,6 +147,7 @@ Json resultJson(const Request& rq, const staa::SimResult& r) {
   j["budget"] = staa::budgetJson(o.budget);
   j["heuristic"] = staa::toString(rq.heuristic);
   j["obstacles"] = staa::toString(o.obstacles);
+  j["blind_corners"] = o.control.blind_corners.enabled;
   if (staa::perceived(o.obstacles)) {
     j["camera_frames"] = r.camera_frames;
     j["camera_frames_lost"] = r.camera_frames_lost;
@@ -436,6 +437,7 @@ Json multiResultJson(const MultiRequest& rq, const staa::MultiSimResult& r, doub
   j["budget"] = staa::budgetJson(o.budget);
   j["heuristic"] = staa::toString(rq.heuristic);
   j["obstacles"] = staa::toString(o.obstacles);
+  j["blind_corners"] = o.control.blind_corners.enabled;
   // The agents start on goal locations and drive to random ones: no single start or goal.
   j["start"] = nullptr;
   j["goal"] = nullptr;
@@ -634,6 +636,7 @@ struct Args {
   std::optional<staa::cli::BudgetOptions> budget;
   staa::HeuristicKind heuristic = staa::HeuristicKind::kPathRtr;
   staa::ObstacleSource obstacles = staa::ObstacleSource::kTruth;
+  bool blind_corners = false;
   int svg_every = 15;
   bool quiet = false;
   const CLI::Option* duration_option = nullptr;  // for messages naming the values given
@@ -686,6 +689,10 @@ void addOptions(staa::cli::CommandLine& cl, Args& a) {
   a.budget.emplace(cl, "run");
   cli::choice(app.add_option("--heuristic", a.heuristic, "path-rtr, path-euclid or dijkstra-rtr"),
               cli::kHeuristicNames, a.heuristic);
+  cli::choice(app.add_option("--blind-corners", a.blind_corners,
+                             "on or off: limit the speed at the map's blind corners so that the robot can stop within "
+                             "half the distance at which an agent behind them appears (ControlConfig::blind_corners)"),
+              std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, a.blind_corners);
   cli::choice(app.add_option("--obstacles", a.obstacles,
                              "truth (the exact polygons and velocities of the movers or other agents), depth (what "
                              "the robot profile's depth camera sees of them, through staad's perception) or depth+scan "
@@ -758,6 +765,7 @@ staa::SimOptions simOptions(const Args& a) {
   o.svg_dir = a.svg_dir;
   o.control.rate_hz = a.rate_hz;
   o.control.staa.heuristic.kind = a.heuristic;
+  o.control.blind_corners.enabled = a.blind_corners;
   o.obstacles = a.obstacles;
   o.record_path = a.record_file;
   if (!a.record_file.empty()) o.record_session = recordSession(a, o.budget);

@@ -1,6 +1,6 @@
 // The 30 Hz cycle allocates nothing after start-up: 1,000 cycles of a busy scene (the office,
 // three people walking through it) with operator new counted around every step, for STAA*
-// with both heuristics and for the PD and DWA baselines.
+// with both heuristics, for the PD and DWA baselines, and with the blind-corner limit.
 #include "control/control_cycle.hpp"
 #include "control/dwa_controller.hpp"
 #include "control/pd_controller.hpp"
@@ -37,12 +37,15 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
     const char* name;
     HeuristicKind heuristic;
     LocalController* baseline;
+    bool blind_corners = false;
   };
   for (const Variant& variant : {Variant{"staa path-rtr", HeuristicKind::kPathRtr, nullptr},
                                  Variant{"staa dijkstra-rtr", HeuristicKind::kDijkstraRtr, nullptr},
-                                 Variant{"pd", HeuristicKind::kPathRtr, &pd}, Variant{"dwa", HeuristicKind::kPathRtr, &dwa}}) {
+                                 Variant{"pd", HeuristicKind::kPathRtr, &pd}, Variant{"dwa", HeuristicKind::kPathRtr, &dwa},
+                                 Variant{"staa with the blind-corner limit", HeuristicKind::kPathRtr, nullptr, true}}) {
     ControlConfig config;
     config.staa.heuristic.kind = variant.heuristic;
+    config.blind_corners.enabled = variant.blind_corners;
     ControlCycle cycle(s.map, s.robot, config);
     cycle.setLocalController(variant.baseline);
     cycle.setGoal(s.goal);
@@ -54,7 +57,9 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
     int planned = 0;
     // 1,000 cycles for STAA* with its own heuristic (the test); 300 for the variants,
     // which keeps the sanitizer run in CI short.
-    const int cycles = variant.baseline == nullptr && variant.heuristic == HeuristicKind::kPathRtr ? 1000 : 300;
+    const int cycles =
+        variant.baseline == nullptr && variant.heuristic == HeuristicKind::kPathRtr && !variant.blind_corners ? 1000 : 300;
+    int capped = 0;
     for (int k = 0; k < cycles; ++k) {
       for (std::size_t i = 0; i < world.moverCount(); ++i) {
         polys[i] = world.moverPolygon(i);  // the simulator's side: may allocate
@@ -69,6 +74,7 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
       obstacles.set(views, velocities);
       const CycleOutput out = cycle.step(in, PlannerBudget::expansions(300));
       allocations += scope.count();
+      capped += out.speed_capped ? 1 : 0;
       planned += out.planned || (variant.baseline != nullptr && out.state == CycleState::kDriving);
       world.step(1.0 / 30.0, out.v_cmd, out.w_cmd);
       if (out.state == CycleState::kReached) {  // drive back and forth to keep it busy
@@ -77,6 +83,9 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
     }
     EXPECT_EQ(allocations, 0u) << variant.name;
     EXPECT_GT(planned, cycles * 9 / 10) << variant.name;
+    if (variant.blind_corners) {
+      EXPECT_GT(capped, 10) << "the office's doors really capped the speed";
+    }
   }
 }
 
