@@ -264,6 +264,32 @@ TEST_F(FlightRecorder, ADepthRunRecordsWhatPerceptionGaveThePlannersAndReplaysBi
   EXPECT_GT(limited, 0u) << "the camera's speed limit held some command";
 }
 
+// The blind-corner limit in ghost mode: the observed agent's cycle lowers its commands at the
+// office's doors, the ghosts' cycles have no limit; the recording says which agents are ghosts,
+// so the replay rebuilds each cycle as the simulator built it and reruns it bit for bit.
+TEST_F(FlightRecorder, BlindCornerLimitedAgentsAndTheirGhostsReplayBitForBit) {
+  const fs::path file = dir_ / "blind.mcap";
+  const ToolRun sim = runTool({STAA_SIM_EXE, "--map", (staa::test::sourceDir() / "config/maps/office.yaml").string(),
+                           "--agents", "3", "--mode", "ghost", "--blind-corners", "on", "--budget-expansions", "300",
+                           "--duration", "4", "--seed", "3", "--quiet", "--record", file.string()},
+                          dir_, "sim");
+  ASSERT_EQ(sim.code, std::optional<int>(0)) << sim.err;
+  expectAllIdentical(runTool({STAA_REPLAY_EXE, file.string(), "--check"}, dir_, "check"), 359, "blind corners");
+  const staa::record::Recording rec = staa::record::loadRecording(file);
+  EXPECT_TRUE(rec.session.control.blind_corners.enabled);
+  ASSERT_EQ(rec.session.agents.size(), 3u);
+  EXPECT_FALSE(rec.session.agents[0].ghost);
+  EXPECT_TRUE(rec.session.agents[1].ghost);
+  EXPECT_TRUE(rec.session.agents[2].ghost);
+  // Rerun without the limit: the observed agent's commands change where it was capped, the
+  // ghosts' (never capped) do not.
+  const ToolRun off = runTool({STAA_REPLAY_EXE, file.string(), "--check", "--set", "blind_corners.enabled=false"}, dir_, "off");
+  ASSERT_EQ(off.code, std::optional<int>(1)) << off.err;  // 1: a difference found
+  EXPECT_LT(off.out.find("cycles changed"), off.out.find("agent 1:")) << "agent 0's commands changed: " << off.out;
+  EXPECT_NE(off.out.find("agent 1: 120 cycles, none changed"), std::string::npos) << off.out;
+  EXPECT_NE(off.out.find("agent 2: 120 cycles, none changed"), std::string::npos) << off.out;
+}
+
 // Issue 16: a rectangular robot whose route runs in the passage map M'' (the building's doors,
 // narrowed by furniture below what M' leaves open) carries the route choice between M' and M''
 // from cycle to cycle; the replay compares it with the recorded memory every cycle.

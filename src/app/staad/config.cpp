@@ -576,6 +576,23 @@ void readGoal(const ConfigValue& root, DaemonConfig& config) {
   }
 }
 
+void readBlindCorners(const ConfigValue& root, DaemonConfig& config) {
+  const ConfigValue section = root.section(
+      "blind_corners", {"enabled", "reaction_s", "decel", "clearance_m", "min_speed", "range_m", "lateral_m"});
+  BlindCornerConfig& b = config.control.blind_corners;
+  if (const ConfigValue n = section.get("enabled"); n.given()) b.enabled = n.boolean();
+  if (const ConfigValue n = section.get("reaction_s"); n.given()) b.reaction_s = n.number(Range::closed(0.0, 5.0, "s"));
+  if (const ConfigValue n = section.get("decel"); n.given()) {
+    b.decel = n.number(Range::closed(0.0, 100.0, "m/s^2", "0: the robot's a_max"));
+  }
+  if (const ConfigValue n = section.get("clearance_m"); n.given()) {
+    b.clearance_m = n.number(Range::closed(0.0, 10.0, "m", "0: the footprint's circumradius"));
+  }
+  if (const ConfigValue n = section.get("min_speed"); n.given()) b.min_speed = n.number(Range::closed(0.0, 100.0, "m/s"));
+  if (const ConfigValue n = section.get("range_m"); n.given()) b.range_m = n.number(Range::leftOpen(0.0, 100.0, "m"));
+  if (const ConfigValue n = section.get("lateral_m"); n.given()) b.lateral_m = n.number(Range::closed(0.0, 100.0, "m"));
+}
+
 void readTelemetry(const ConfigValue& root, DaemonConfig& config) {
   const ConfigValue telemetry = root.section("telemetry", {"path", "records", "svg"});
   // A file path, or "" (or nothing) for off.
@@ -631,7 +648,7 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   const fs::path base = (ec ? source : absolute).parent_path();
   const io::ConfigDocument doc = io::ConfigDocument::parse(yaml_text, source.string(), base);
   const ConfigValue& root = doc.root(kFormat, {"format", "robot", "map", "hal", "sim", "socketcan", "obstacles", "camera",
-                                               "scanner", "rates", "budget", "threads", "socket", "limits", "goal",
+                                               "scanner", "rates", "budget", "threads", "socket", "limits", "goal", "blind_corners",
                                                "telemetry", "recorder", "memory", "debug", "ros"});
   DaemonConfig config;
   config.file = source;
@@ -651,6 +668,7 @@ DaemonConfig parseDaemonConfig(const std::string& yaml_text, const fs::path& sou
   readSocket(root, config);
   readLimits(root, config);
   readGoal(root, config);
+  readBlindCorners(root, config);
   readTelemetry(root, config);
   readRecorder(root, config);
   readMemory(root, config);

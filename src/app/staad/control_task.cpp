@@ -323,6 +323,7 @@ void ControlTask::step(rt::Nanos now) {
     out = cycle_->step(in, budget);
     path_max_ = std::max<rt::Nanos>(path_max_, out.path_ns);
     local_max_ = std::max<rt::Nanos>(local_max_, out.local_ns);
+    capped_cycles_ += out.speed_capped ? 1 : 0;
     setState(now, fromCycleState(out.state), fault);
     publishCommand(now, &out);
   }
@@ -419,6 +420,9 @@ void ControlTask::publishStatus(rt::Nanos now) {
   s.expansions = last_output_.planned ? last_output_.plan.stats.pops : 0u;
   s.depth = last_output_.planned ? static_cast<double>(last_output_.plan.depth) : 0.0;
   s.budget_ms = budget_ms_;
+  s.blind_corners = cycle_ != nullptr && cycle_->config().blind_corners.enabled;
+  s.speed_cap = last_output_.speed_cap;
+  s.capped_cycles = capped_cycles_;
   s.path_max_ns = path_max_;
   s.local_max_ns = local_max_;
   s.time_s = static_cast<double>(now) * 1e-9;

@@ -151,6 +151,7 @@ class ControlTask final : public rt::Runnable {
   CommandSlot last_command_;
   Status last_status_;
   std::uint64_t cycles_ = 0;
+  std::uint64_t capped_cycles_ = 0;  // cycles whose command the blind-corner limit lowered
 
   // Telemetry: the record of the last cycle waits one cycle so that its overrun flag (known
   // only after the periodic loop's finish()) is filled in.

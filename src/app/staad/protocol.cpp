@@ -445,6 +445,10 @@ nlohmann::json statusJson(const Status& status, std::uint64_t rt_allocations) {
                   {"budget_ms", status.budget_ms > 0.0 ? Json(status.budget_ms) : Json(nullptr)},
                   {"path_max_us", static_cast<double>(status.path_max_ns) * 1e-3},
                   {"local_max_us", static_cast<double>(status.local_max_ns) * 1e-3}};
+  // cap_mps null: no blind corner ahead (or the limit is off).
+  j["blind_corners"] = {{"enabled", status.blind_corners},
+                        {"cap_mps", std::isfinite(status.speed_cap) ? Json(status.speed_cap) : Json(nullptr)},
+                        {"capped_cycles", status.capped_cycles}};
   j["time_s"] = status.time_s;
   j["ros"] = rosJson(status.ros);
   j["scanner"] = scannerJson(status.scanner);

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 namespace staa::staad {
 
@@ -104,6 +105,11 @@ struct Status {
   double budget_ms = 0.0;
   std::int64_t path_max_ns = 0;
   std::int64_t local_max_ns = 0;
+  // The blind-corner limit (blind_corners.enabled): the last cycle's cap (infinite: no blind
+  // corner ahead) and the cycles whose command it lowered.
+  bool blind_corners = false;
+  double speed_cap = std::numeric_limits<double>::infinity();
+  std::uint64_t capped_cycles = 0;
   double time_s = 0.0;    // monotonic time of the snapshot
   // Set by the service thread, not the control thread: the id of the newest goal it queued
   // (0: none yet). It runs ahead of goal_id until the control thread takes that goal (within

@@ -59,6 +59,11 @@ limits:
 goal:
   tolerance_m: 0.2
   heading_tolerance: 0.4
+blind_corners:
+  enabled: true
+  reaction_s: 0.25
+  min_speed: 0.4
+  lateral_m: 0.6
 telemetry:
   path: ""
   records: 4096
@@ -194,6 +199,11 @@ TEST_F(ConfigFiles, ReadsEveryKeyOfAValidConfig) {
   EXPECT_EQ(c.perception_thread.priority, 0);
   EXPECT_EQ(c.service_nice, -5);
   EXPECT_TRUE(c.svg_path.empty());  // "": off
+  EXPECT_TRUE(c.control.blind_corners.enabled);
+  EXPECT_DOUBLE_EQ(c.control.blind_corners.reaction_s, 0.25);
+  EXPECT_DOUBLE_EQ(c.control.blind_corners.min_speed, 0.4);
+  EXPECT_DOUBLE_EQ(c.control.blind_corners.lateral_m, 0.6);
+  EXPECT_DOUBLE_EQ(c.control.blind_corners.range_m, BlindCornerConfig{}.range_m);  // not given: the default
 }
 
 TEST_F(ConfigFiles, TelemetrySvgIsAPathOrEmptyForOff) {
@@ -250,6 +260,11 @@ TEST_F(ConfigFiles, EveryBadValueIsNamedWithItsKeyAndLine) {
       {"obstacles_timeout_s: 0.2", "obstacles_timeout_s: -1", {"limits.obstacles_timeout_s", "-1"}},
       {"tolerance_m: 0.2", "tolerance_m: 0", {"goal.tolerance_m", "got 0"}},
       {"heading_tolerance: 0.4", "heading_tolerance: nope", {"goal.heading_tolerance", "'nope'"}},
+      {"enabled: true", "enabled: often", {"blind_corners.enabled", "'often'"}},
+      {"reaction_s: 0.25", "reaction_s: 9", {"blind_corners.reaction_s", "9"}},
+      {"min_speed: 0.4", "min_speed: -0.1", {"blind_corners.min_speed", "-0.1"}},
+      {"lateral_m: 0.6", "lateral_m: .nan", {"blind_corners.lateral_m", ".nan"}},
+      {"lateral_m: 0.6", "lateral: 0.6", {"blind_corners.lateral", "unknown key"}},
       {"records: 4096", "records: 8", {"telemetry.records", "16..", "8"}},
       {"records: 4096", "records: many", {"telemetry.records", "many"}},
       {"path: \"\"", "path: [a, b]", {"telemetry.path", "a list of 2 items"}},
