@@ -221,6 +221,21 @@ void readCamera(const ConfigValue& root, DaemonConfig& config) {
   readPerception(camera, c);
 }
 
+}  // namespace
+
+ScannerConfig scannerConfigOf(const ScannerProfile& p) {
+  ScannerConfig c;
+  c.mount = hal::ScanMount{p.x, p.y, p.z, p.yaw};
+  c.fov_deg = p.fov_deg;
+  c.beams = p.beams;
+  c.range_min_m = p.min_range_m;
+  c.range_max_m = p.max_range_m;
+  c.noise_m = p.noise_m;
+  return c;
+}
+
+namespace {
+
 // obstacles: depth: the base's laser scanner (after the camera: backend sim scans the world
 // the camera renders).
 void readScanner(const ConfigValue& root, DaemonConfig& config) {
@@ -235,6 +250,16 @@ void readScanner(const ConfigValue& root, DaemonConfig& config) {
   if (c.backend == ScannerBackend::kSim && config.camera.backend != CameraBackend::kSim) {
     backend.fail("sim scans the simulated world the camera renders: it needs camera.backend: sim, got camera.backend " +
                  std::string(toString(config.camera.backend)) + " (use scanner.backend: ros or none)");
+  }
+  // The robot profile's scanner is the default (its mount and sweep); the section's keys
+  // override it. A profile without one gives no mount to guess: it must be given.
+  if (config.robot.has_scanner) {
+    const ScannerBackend chosen = c.backend;
+    c = scannerConfigOf(config.robot.scanner);
+    c.backend = chosen;
+  } else if (c.backend != ScannerBackend::kNone && !m.get("z").given()) {
+    m.get("z").fail("required: the robot profile " + config.robot_file.string() +
+                    " has no scanner section to take the scanner's mount from");
   }
   auto read = [](const ConfigValue& section, std::string_view key, double& out, const Range& range) {
     if (const ConfigValue n = section.get(key); n.given()) out = n.number(range);

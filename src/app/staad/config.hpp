@@ -143,18 +143,23 @@ struct CameraConfig {
 // the scanner does not move on the base).
 struct ScannerConfig {
   ScannerBackend backend = ScannerBackend::kNone;
-  // The HSR-B's base_range_sensor_joint (config/robots/hsr.yaml's scanner).
-  hal::ScanMount mount{0.1675, 0.0, 0.1844, 0.0};
+  // Where the robot profile's `scanner` section puts it (config/robots/hsr.yaml: the HSR-B's
+  // base_range_sensor_joint); without one, scanner.mount must be given.
+  hal::ScanMount mount{0.0, 0.0, 0.0, 0.0};
   // A scan farther than this from a depth frame's stamp is not perceived with it (s).
   double max_age_s = 0.1;
   // backend sim: the sweep (degrees, centred on the mount's yaw), its beams (both ends
-  // included), the ranges that return (m) and the range noise (m, standard deviation).
+  // included), the ranges that return (m) and the range noise (m, standard deviation); the
+  // robot profile's when it has a scanner.
   double fov_deg = 270.0;
   int beams = 1081;
   double range_min_m = 0.05;
   double range_max_m = 20.0;
   double noise_m = 0.01;
 };
+
+// A robot profile's scanner as staad's (backend none): the defaults of the scanner section.
+ScannerConfig scannerConfigOf(const ScannerProfile& profile);
 
 // The ros section (docs/ros.md): topics, frames and rates of the ROS link. Defaults are the
 // HSR-B's ROS 1 names. The link runs when the section is given or anything is taken over ROS

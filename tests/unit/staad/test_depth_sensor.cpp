@@ -423,7 +423,8 @@ TEST_F(CameraConfigFiles, ShippedConfigsCommentedScannerBlockLoadsWithItsValues)
   const std::string text = shippedWithBlock("# scanner:", "obstacles: depth\ncamera: {backend: sim}", lines);
   ASSERT_GE(lines, 8) << "no commented scanner block in config/staad.yaml";
   const ScannerConfig s = load(text, "shipped/staad.yaml").scanner;
-  const ScannerConfig defaults;
+  // The defaults: the shipped robot profile's scanner (the HSR's).
+  const ScannerConfig defaults = load(kDepth).scanner;
   EXPECT_EQ(s.backend, ScannerBackend::kSim);
   EXPECT_DOUBLE_EQ(s.mount.x, defaults.mount.x);
   EXPECT_DOUBLE_EQ(s.mount.z, defaults.mount.z);
@@ -473,6 +474,48 @@ TEST_F(CameraConfigFiles, ReadsEveryScannerKey) {
   const DaemonConfig topic =
       load(edited("backend: sim\n  mount", "backend: ros\n  mount", kScanner) + "ros: {scanner: {topic: /base_scan}}\n");
   EXPECT_EQ(topic.ros.transport.scan_topic, "/base_scan");
+}
+
+// The robot profile's scanner is the one source of the scanner's mount and sweep: staad's
+// section overrides it key by key, and with a profile that has none the mount must be given.
+TEST_F(CameraConfigFiles, TheScannerDefaultsToTheRobotProfilesAndNeedsAMountWithoutOne) {
+  std::string profile = readFile(dir_ / "robots/hsr.yaml");
+  const std::string hsr_mount = "mount: {x: 0.1675, y: 0.0, z: 0.1844, yaw: 0.0}";
+  ASSERT_NE(profile.find(hsr_mount), std::string::npos);
+  profile.replace(profile.find(hsr_mount), hsr_mount.size(), "mount: {x: 0.21, y: 0.01, z: 0.3, yaw: 0.1}");
+  profile.replace(profile.find("beams: 1081"), std::string("beams: 1081").size(), "beams: 541");
+  write("robots/other.yaml", profile);
+  auto withRobot = [&](const std::string& robot, const std::string& scanner) {
+    std::string text = kDepth + scanner;
+    text.replace(text.find("robots/hsr.yaml"), std::string("robots/hsr.yaml").size(), robot);
+    return text;
+  };
+  const ScannerConfig from_profile = load(withRobot("robots/other.yaml", "scanner: {backend: sim}\n")).scanner;
+  EXPECT_DOUBLE_EQ(from_profile.mount.x, 0.21);
+  EXPECT_DOUBLE_EQ(from_profile.mount.y, 0.01);
+  EXPECT_DOUBLE_EQ(from_profile.mount.z, 0.3);
+  EXPECT_DOUBLE_EQ(from_profile.mount.yaw, 0.1);
+  EXPECT_EQ(from_profile.beams, 541);
+  const ScannerConfig overridden =
+      load(withRobot("robots/other.yaml", "scanner: {backend: sim, mount: {z: 0.25}, beams: 361}\n")).scanner;
+  EXPECT_DOUBLE_EQ(overridden.mount.x, 0.21);
+  EXPECT_DOUBLE_EQ(overridden.mount.z, 0.25);
+  EXPECT_EQ(overridden.beams, 361);
+
+  // Without a scanner section in the profile: the mount's z is required, naming the profile.
+  std::string bare = readFile(dir_ / "robots/hsr.yaml");
+  bare.erase(bare.find("\nscanner:"));
+  write("robots/bare.yaml", bare + "\n");
+  const std::string error = loadError(withRobot("robots/bare.yaml", "scanner: {backend: sim}\n"));
+  EXPECT_NE(error.find("scanner.mount.z"), std::string::npos) << error;
+  EXPECT_NE(error.find("bare.yaml"), std::string::npos) << error;
+  EXPECT_NE(error.find("no scanner section"), std::string::npos) << error;
+  const ScannerConfig given =
+      load(withRobot("robots/bare.yaml", "scanner: {backend: sim, mount: {x: 0.1, z: 0.2}}\n")).scanner;
+  EXPECT_DOUBLE_EQ(given.mount.x, 0.1);
+  EXPECT_DOUBLE_EQ(given.mount.z, 0.2);
+  // The camera alone (backend none) needs no mount.
+  EXPECT_EQ(load(withRobot("robots/bare.yaml", "")).scanner.backend, ScannerBackend::kNone);
 }
 
 TEST_F(CameraConfigFiles, EveryBadScannerValueIsNamedWithItsKeyLineAndValue) {
@@ -547,6 +590,8 @@ const RobotProfile& hsrProfile() {
   static const RobotProfile robot = loadRobotProfile(test::sourceDir() / "config/robots/hsr.yaml");
   return robot;
 }
+// staad's scanner defaults with the shipped HSR profile: its `scanner` section.
+ScannerConfig hsrScanner() { return scannerConfigOf(hsrProfile().scanner); }
 
 Polygon placed(const Polygon& shape, const Vec2& at) {
   Polygon p;
@@ -603,7 +648,7 @@ class DepthLockstep {
       : sim_(officeMap(), hsrProfile(), simConfig(start, seed), 0),
         tap_(sim_.base(), slot_),
         sensor_(officeMap(), CameraConfig{}, seed, sim_.obstacles(), slot_) {
-    if (scanner) sensor_.addSimScanner(officeMap(), ScannerConfig{}, seed);  // the HSR's, as staad's defaults
+    if (scanner) sensor_.addSimScanner(officeMap(), hsrScanner(), seed);  // the HSR's, as staad's defaults
   }
 
   static hal::SimHalConfig simConfig(const Pose2& start, std::uint64_t seed) {
@@ -897,7 +942,7 @@ TEST(DepthSensorScanner, AMoverBesideTheRobotIsAnObstacleWithTheSimScannerAndNot
   EXPECT_FALSE(camera_alone.sensor.scannerStatus().enabled);
 
   BesideTheRobot with_scanner;
-  with_scanner.sensor.addSimScanner(officeMap(), ScannerConfig{}, 1);
+  with_scanner.sensor.addSimScanner(officeMap(), hsrScanner(), 1);
   EXPECT_EQ(with_scanner.run(10), 1) << "the scan sees it";
   const Polygon seen = polygonOf(with_scanner.out.obstacles[0]);
   EXPECT_LE(distanceTo(Vec2(4.5, 5.2), seen), 0.2) << "its face towards the robot is covered";
@@ -936,7 +981,7 @@ TEST(DepthSensorScanner, TheNewestScanIsUsedOnlyWithinMaxAgeOfTheFramesStamp) {
   BesideTheRobot scene;
   auto owned = std::make_unique<ScriptedScanner>();
   ScriptedScanner& scripted = *owned;
-  ScannerConfig config;
+  ScannerConfig config = hsrScanner();
   config.backend = ScannerBackend::kRos;
   config.max_age_s = 0.1;
   scene.sensor.addScanner(config, std::move(owned));
@@ -994,7 +1039,7 @@ TEST(DepthSensorScanner, TheSimScannerNeedsTheSimCamerasWorld) {
   OdometrySlot slot;
   DepthSensor sensor(officeMap(), CameraConfig{}, std::make_unique<hal::SimDepthCamera>(world, simDepthConfig(CameraConfig{}, 1)),
                      slot);
-  EXPECT_THROW(sensor.addSimScanner(officeMap(), ScannerConfig{}, 1), std::logic_error);
+  EXPECT_THROW(sensor.addSimScanner(officeMap(), hsrScanner(), 1), std::logic_error);
   EXPECT_THROW(sensor.addScanner(ScannerConfig{}, nullptr), std::invalid_argument);
   EXPECT_FALSE(sensor.hasScanner());
 }
