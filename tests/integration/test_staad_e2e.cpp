@@ -453,6 +453,26 @@ TEST_F(StaadE2E, GoalWaitAndWaitEndOnlyAtTheNewGoalRightAfterThePreviousWasReach
   EXPECT_EQ((*third)["rt_allocations"], 0);
 }
 
+// blind_corners in the config: driving from the corridor into a room, the daemon lowers its
+// commands at the door's frame (the status counts the cycles), still reaches the goal, and the
+// cycle allocates nothing. (Along the 3 m corridor the doors are 1.5 m aside: not counted.)
+TEST_F(StaadE2E, TheBlindCornerLimitSlowsTheRobotAtCornersAndItStillArrives) {
+  daemon_ = startDaemon(writeConfig(config() + "blind_corners: {enabled: true}\n"), {}, "staad");
+  ASSERT_TRUE(answering());
+  const auto before = status();
+  ASSERT_TRUE(before.has_value());
+  EXPECT_EQ((*before)["blind_corners"]["enabled"], true) << before->dump();
+  EXPECT_EQ((*before)["blind_corners"]["capped_cycles"], 0);
+  const auto [code, out] = staactl({"goal", "1.5", "7.5", "3.1416", "--wait", "--timeout", "60"}, milliseconds(90'000));
+  ASSERT_TRUE(code.has_value()) << "goal --wait did not return";
+  EXPECT_EQ(*code, 0) << out << readFile(dir_ / "staactl.err");
+  const auto after = status();
+  ASSERT_TRUE(after.has_value());
+  EXPECT_EQ((*after)["state"], "reached") << after->dump();
+  EXPECT_GT((*after)["blind_corners"]["capped_cycles"].get<int>(), 5) << after->dump();
+  EXPECT_EQ((*after)["rt_allocations"], 0);
+}
+
 // `staad --svg FILE`, with no telemetry file: on SIGTERM the picture of the run is written.
 TEST_F(StaadE2E, SvgOfTheRunIsWrittenOnSigtermEvenWithoutATelemetryFile) {
   const fs::path svg = dir_ / "run.svg";
