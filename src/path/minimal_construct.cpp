@@ -540,20 +540,8 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   target_ = addTargetNode(start);
   // The start stays out of the heap until the search needs it there: the test below excludes
   // it anyway, and the heap pops in a strict order (f, g, id), so where it sat changes no pop.
-  // Its parent is the closed node with the least g + |c - start| (the first in closing order
-  // among equals), as relaxOutsideHeap over closed_ picks it. The candidates are kept: while
-  // the loop below runs, closed_ does not change, and each blocked edge only removes its
-  // parent, so the next parent is the next candidate (a heap, not another scan of closed_:
-  // a start walled in by the obstacles tries hundreds of parents).
-  start_candidates_.clear();
+  for (const std::int32_t c : closed_) relaxOutsideHeap(c, target_);
   start_candidates_heap_ = false;
-  for (std::size_t i = 0; i < closed_.size(); ++i) {
-    const std::int32_t c = closed_[i];
-    if (!canFollow(c, target_)) continue;
-    const Node& a = nodes_[static_cast<std::size_t>(c)];
-    start_candidates_.push_back(StartCandidate{a.g + (nodes_[kTarget].pos - a.pos).norm(), static_cast<std::uint32_t>(i)});
-  }
-  adoptStartParent();
   // The common case, without touching the heap: the new start's best connection to the
   // tree is at least as short as anything still open (true keys, computed by a scan) and
   // its edge is free. Then it would be the next pop of a re-keyed heap, and is the answer.
@@ -575,20 +563,10 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
     // The search checked the first start edge again after this test (counted as it did);
     // later tests stand for the search's own checks.
     if (first) ++edge_checks_;
-    // blockedEdgeInto(target_, ..., in_heap = false) with the kept candidates.
+    // blockedEdgeInto(target_, ..., in_heap = false), the new parent from the candidates.
     markEdgeBlocked(nodes_[kTarget].parent, target_);
     for (std::size_t i = 0; i < start_blockers_; ++i) discoverPolygon(blockers_[i], use_dynamic);
-    if (!start_candidates_heap_) {
-      std::make_heap(start_candidates_.begin(), start_candidates_.end(), StartCandidate::later);
-      start_candidates_heap_ = true;
-    }
-    std::pop_heap(start_candidates_.begin(), start_candidates_.end(), StartCandidate::later);
-    start_candidates_.pop_back();
-    Node& t = nodes_[kTarget];
-    t.state = kUnseen;
-    t.parent = kNone;
-    t.g = kInf;
-    adoptStartParent();
+    nextStartParent();
   }
   if (nodes_[static_cast<std::size_t>(target_)].state == kOpen) heapPush(target_);
   // Re-key the open list for the new start (the heuristic changed) and restore the heap.
@@ -601,20 +579,37 @@ bool MinimalConstruct::reattachStart(const Vec2& start, bool use_dynamic, const 
   return false;
 }
 
-void MinimalConstruct::adoptStartParent() {
-  if (start_candidates_.empty()) return;
-  // The heap's top, or before it is built the least candidate by a scan (most starts take
-  // their first parent).
-  const StartCandidate* best = &start_candidates_.front();
+void MinimalConstruct::nextStartParent() {
+  // repairParent(target_) relaxes the start from every closed node again; a start the
+  // obstacles wall in tries hundreds of parents, so that is done once, at its first blocked
+  // edge: the candidates (closed nodes it can follow, by g + distance) go into a heap in the
+  // order the relaxation picks them (least g, then closing order). closed_ does not change
+  // while reattachStart tries them, and each blocked edge removes only its parent, which is
+  // the heap's top: the next top is the parent repairParent would find.
   if (!start_candidates_heap_) {
-    for (const StartCandidate& c : start_candidates_) {
-      if (StartCandidate::later(*best, c)) best = &c;
+    start_candidates_.clear();
+    const Vec2 start = nodes_[kTarget].pos;
+    for (std::size_t i = 0; i < closed_.size(); ++i) {
+      const std::int32_t c = closed_[i];
+      if (!canFollow(c, target_)) continue;
+      const Node& a = nodes_[static_cast<std::size_t>(c)];
+      start_candidates_.push_back(StartCandidate{a.g + (start - a.pos).norm(), static_cast<std::uint32_t>(i)});
     }
+    std::make_heap(start_candidates_.begin(), start_candidates_.end(), StartCandidate::later);
+    start_candidates_heap_ = true;
   }
+  // The top is the parent just found blocked.
+  std::pop_heap(start_candidates_.begin(), start_candidates_.end(), StartCandidate::later);
+  start_candidates_.pop_back();
   Node& t = nodes_[kTarget];
-  t.g = best->g;
-  t.f = best->g;  // + |start - start|
-  t.parent = closed_[best->closed_index];
+  t.state = kUnseen;
+  t.parent = kNone;
+  t.g = kInf;
+  if (start_candidates_.empty()) return;
+  const StartCandidate& best = start_candidates_.front();
+  t.g = best.g;
+  t.f = best.g;  // + |start - start|
+  t.parent = closed_[best.closed_index];
   t.state = kOpen;
 }
 

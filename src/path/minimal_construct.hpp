@@ -181,8 +181,9 @@ class MinimalConstruct {
   bool reattachStart(const Vec2& start, bool use_dynamic, const Deadline& deadline, std::uint32_t& until_check,
                      Result& result);
   StartStep startIsNextPop(bool use_dynamic, Result& result);
-  // The start's parent: the least of start_candidates_ (none: the start stays unseen).
-  void adoptStartParent();
+  // reattachStart's repairParent(target_) after a blocked edge into the start, from a heap of
+  // candidates built at the first one.
+  void nextStartParent();
   void plantTree(const Vec2& start, const Vec2& goal, bool use_dynamic);
   // `until_check`: pops before the first deadline check (0: at once).
   Status search(bool use_dynamic, const Deadline& deadline, std::uint32_t until_check, Result& result);
