@@ -56,7 +56,10 @@ void MinimalConstruct::setStaticObstacles(std::span<const Polygon> polygons) {
   open_scan_.reserve(max_nodes);
   open_scan_valid_ = false;
   closed_.reserve(max_nodes);
-  start_candidates_.reserve(max_nodes);
+  // Written once, so that its pages are mapped now: it is first filled inside a cycle, at a
+  // start's first blocked edge, where a page fault on a first touch would stall the cycle.
+  start_candidates_.assign(max_nodes, StartCandidate{});
+  start_candidates_.clear();
   closed_corner_.reserve(max_nodes);
   path_.reserve(max_nodes + 2);
   blockers_.assign(static_.polygonCount() + options_.max_dynamic_polygons, 0);
