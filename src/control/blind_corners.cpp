@@ -16,25 +16,20 @@ double blindCornerSpeed(double room, double reaction_s, double decel, double min
 
 BlindCorners::BlindCorners(std::span<const Polygon> polygons, const BlindCornerConfig& config, double clearance,
                            double decel)
-    : config_(config), clearance_(clearance), decel_(decel > 0.0 ? decel : 1.0) {
+    : config_(config), clearance_(clearance), decel_(decel > 0.0 ? decel : 1.0), sight_(polygons) {
   for (const Polygon& poly : polygons) {
     const std::size_t n = poly.size();
     if (n < 3) continue;
     const double orientation = signedArea(poly) >= 0.0 ? 1.0 : -1.0;
-    edge_first_.push_back(static_cast<std::uint32_t>(edge_a_.size()));
-    edge_box_.push_back(boundingBox(poly));
     for (std::size_t i = 0; i < n; ++i) {
       const Vec2& prev = poly[(i + n - 1) % n];
       const Vec2& p = poly[i];
       const Vec2& next = poly[(i + 1) % n];
-      edge_a_.push_back(p);
-      edge_b_.push_back(next);
       // Only convex corners hide anything beside them: at a reflex one the line of sight
       // runs on into the obstacle.
       if (orientation * orientDeterminant(prev, p, next) > 0.0) vertices_.push_back(Vertex{p, prev, next});
     }
   }
-  edge_first_.push_back(static_cast<std::uint32_t>(edge_a_.size()));
 }
 
 bool BlindCorners::visible(const Vec2& from, const Vec2& corner) const {
@@ -42,15 +37,7 @@ bool BlindCorners::visible(const Vec2& from, const Vec2& corner) const {
   const Vec2 d = corner - from;
   const double len = d.norm();
   if (len <= 1e-9) return true;
-  const Vec2 end = from + d * ((len - 1e-6) / len);
-  const Box sight{from.cwiseMin(end), from.cwiseMax(end)};
-  for (std::size_t k = 0; k + 1 < edge_first_.size(); ++k) {
-    if (!edge_box_[k].overlaps(sight)) continue;
-    for (std::uint32_t e = edge_first_[k]; e < edge_first_[k + 1]; ++e) {
-      if (segmentsIntersect(from, end, edge_a_[e], edge_b_[e])) return false;
-    }
-  }
-  return true;
+  return sight_.clear(from, from + d * ((len - 1e-6) / len));
 }
 
 BlindCorners::Cap BlindCorners::speedCap(const Pose2& pose) const {

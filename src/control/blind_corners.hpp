@@ -18,10 +18,10 @@
 //
 // Built once from the map; speedCap() allocates nothing (the control cycle calls it).
 
+#include "geometry/line_of_sight.hpp"
 #include "geometry/polygon.hpp"
 #include "geometry/types.hpp"
 
-#include <cstdint>
 #include <limits>
 #include <span>
 #include <vector>
@@ -70,9 +70,7 @@ class BlindCorners {
   double clearance_ = 0.0;
   double decel_ = 1.0;
   std::vector<Vertex> vertices_;
-  std::vector<Vec2> edge_a_, edge_b_;  // every map edge, for the line-of-sight test
-  std::vector<Box> edge_box_;          // per polygon: its edges' box, and its first edge
-  std::vector<std::uint32_t> edge_first_;
+  LineOfSight sight_;  // every map edge
 };
 
 }  // namespace staa

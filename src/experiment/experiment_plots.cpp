@@ -394,12 +394,15 @@ std::string obstacleScoresSvg(const std::vector<ExperimentCell>& cells, Heuristi
       {ControllerKind::kPd, ObstacleSource::kTruth, {"PD truth", "#e08a2c"}},
       {ControllerKind::kPd, ObstacleSource::kDepth, {"PD depth", "#f3c797"}},
       {ControllerKind::kPd, ObstacleSource::kDepthScan, {"PD depth+scan", "#f8e2c8"}},
+      {ControllerKind::kPd, ObstacleSource::kSight, {"PD sight", "#b86a1c"}},
       {ControllerKind::kDwa, ObstacleSource::kTruth, {"DWA truth", "#5b7fc7"}},
       {ControllerKind::kDwa, ObstacleSource::kDepth, {"DWA depth", "#b3c4e6"}},
       {ControllerKind::kDwa, ObstacleSource::kDepthScan, {"DWA depth+scan", "#dde5f4"}},
+      {ControllerKind::kDwa, ObstacleSource::kSight, {"DWA sight", "#35559a"}},
       {ControllerKind::kStaa, ObstacleSource::kTruth, {"STAA* truth", "#2a9d6a"}},
       {ControllerKind::kStaa, ObstacleSource::kDepth, {"STAA* depth", "#96d8b8"}},
       {ControllerKind::kStaa, ObstacleSource::kDepthScan, {"STAA* depth+scan", "#cdeedd"}},
+      {ControllerKind::kStaa, ObstacleSource::kSight, {"STAA* sight", "#1b6b47"}},
   };
   std::vector<std::size_t> present;
   std::vector<Series> series;

@@ -2,6 +2,7 @@
 
 #include "control/dwa_controller.hpp"
 #include "experiment/agent_camera.hpp"
+#include "experiment/sight_obstacles.hpp"
 #include "control/pd_controller.hpp"
 #include "geometry/splitmix64.hpp"
 #include "record/recorder.hpp"
@@ -85,6 +86,7 @@ struct SimAgent {
   double last_speed = 0.0;  // |v| when this cycle's command was decided
   int last_tier = -1;       // this cycle's STAA* braking-safety tier (-1: none)
   std::unique_ptr<AgentCamera> camera;          // ObstacleSource::kDepth, perceiving agents
+  std::unique_ptr<SightObstacles> sight;        // ObstacleSource::kSight, perceiving agents
 
   explicit SimAgent(std::size_t capacity) : seen(capacity) {}
 };
@@ -215,6 +217,11 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   const DepthObstaclesConfig perception =
       by_camera ? options.perception.value_or(agentPerceptionConfig(robot, options.obstacles == ObstacleSource::kDepthScan))
                 : DepthObstaclesConfig{};
+  const bool by_sight = options.obstacles == ObstacleSource::kSight;
+  const LineOfSight line_of_sight(by_sight ? std::span<const Polygon>(map.obstacles) : std::span<const Polygon>());
+  SightConfig sight_config;
+  sight_config.range_m = kScanRangeM;
+  sight_config.keep_s = DepthObstaclesConfig{}.keep_unseen_s;
   std::vector<std::unique_ptr<SimAgent>> agents;
   agents.reserve(n);
   // Every agent plans against all the others: the capacity is raised to them if it is lower.
@@ -238,6 +245,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
     if (by_camera && a->perceives) {
       a->camera = std::make_unique<AgentCamera>(map, robot, perception, streamSeed(options.seed, kCameraStream + i),
                                                 options.obstacles == ObstacleSource::kDepthScan);
+    }
+    if (by_sight && a->perceives) {
+      a->sight = std::make_unique<SightObstacles>(line_of_sight, n, robot.footprint.size(), sight_config);
     }
     agents.push_back(std::move(a));
   }
@@ -325,6 +335,19 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
         }
         a.seen.set(std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m),
                    std::span<const double>(turn_rates.data(), m));
+      } else if (a.perceives && a.sight) {
+        // The ground truth of the others in its line of sight (and of those just out of it).
+        const Vec2 eye = world.agent(i).pose.position();
+        for (std::size_t j = 0; j < n; ++j) {
+          if (j == i) continue;
+          if (!a.sight->observe(world.time(), eye, j, world.footprint(j), world.velocity(j), world.agent(j).w)) continue;
+          views[m] = a.sight->footprint(j);
+          velocities[m] = a.sight->velocity(j);
+          turn_rates[m] = a.sight->turnRate(j);
+          ++m;
+        }
+        a.seen.set(std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m),
+                   std::span<const double>(turn_rates.data(), m));
       } else if (a.perceives) {
         // Ground truth: the others' footprints, velocities and turn rates.
         for (std::size_t j = 0; j < n; ++j) {
@@ -336,6 +359,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
         }
         a.seen.set(std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m),
                    std::span<const double>(turn_rates.data(), m));
+      }
+      if (a.perceives && options.on_obstacles) {
+        options.on_obstacles(i, std::span<const PolygonView>(views.data(), m), std::span<const Vec2>(velocities.data(), m));
       }
       const RobotState& rs = world.agent(i);
       CycleInputs in;

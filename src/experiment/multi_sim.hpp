@@ -28,6 +28,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <optional>
 #include <span>
 #include <string>
@@ -77,6 +78,10 @@ struct MultiSimOptions {
   // kDepth: called before every camera agent's control cycle with the obstacle frame its
   // planner gets (null before the first has arrived) and its head's pan (diagnostics).
   std::function<void(std::size_t agent, const hal::ObstacleFrame* frame, double pan)> on_perceived;
+  // Called before every perceiving agent's control cycle with the moving obstacles its planner
+  // gets (whatever the source; diagnostics, tests); may be empty.
+  std::function<void(std::size_t agent, std::span<const PolygonView> obstacles, std::span<const Vec2> velocities)>
+      on_obstacles;
   // Every agent's cycles recorded into this MCAP file, the contacts beside them (staa-sim
   // --record; empty: off). kDepth: the obstacles recorded are those perception gave the
   // planner. The runner completes the session.

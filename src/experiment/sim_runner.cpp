@@ -1,6 +1,7 @@
 #include "experiment/sim_runner.hpp"
 
 #include "experiment/agent_camera.hpp"
+#include "experiment/sight_obstacles.hpp"
 #include "record/recorder.hpp"
 #include "viz/map_drawing.hpp"
 #include "viz/svg.hpp"
@@ -38,9 +39,10 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
   constexpr double kPersonHeightM = 1.7;
   std::unique_ptr<AgentCamera> camera;
   std::vector<hal::PrismView> prisms(world.moverCount());
-  std::vector<PolygonView> seen_views(hal::ObstacleFrame::kMaxObstacles);
-  std::vector<Vec2> seen_velocities(hal::ObstacleFrame::kMaxObstacles);
-  std::vector<double> seen_turn_rates(hal::ObstacleFrame::kMaxObstacles);
+  const std::size_t seen_capacity = std::max(hal::ObstacleFrame::kMaxObstacles, world.moverCount());
+  std::vector<PolygonView> seen_views(seen_capacity);
+  std::vector<Vec2> seen_velocities(seen_capacity);
+  std::vector<double> seen_turn_rates(seen_capacity);
   std::size_t seen = 0;  // obstacles in the seen_ spans this cycle
   if (perceived(options.obstacles)) {
     DepthObstaclesConfig perception =
@@ -51,6 +53,18 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     perception.acceleration_mps2 = std::max(perception.acceleration_mps2, 1.0);
     camera = std::make_unique<AgentCamera>(scenario.map, scenario.robot, perception, 1,
                                            options.obstacles == ObstacleSource::kDepthScan);
+  }
+  // Sight: the movers in the robot's line of sight, exactly.
+  std::unique_ptr<LineOfSight> line_of_sight;
+  std::unique_ptr<SightObstacles> sight;
+  if (options.obstacles == ObstacleSource::kSight) {
+    line_of_sight = std::make_unique<LineOfSight>(scenario.map.obstacles);
+    std::size_t vertices = 0;
+    for (std::size_t i = 0; i < world.moverCount(); ++i) vertices = std::max(vertices, world.moverPolygon(i).size());
+    SightConfig config;
+    config.range_m = kScanRangeM;
+    config.keep_s = DepthObstaclesConfig{}.keep_unseen_s;
+    sight = std::make_unique<SightObstacles>(*line_of_sight, world.moverCount(), vertices, config);
   }
   std::unique_ptr<record::SimRecording> recording;
   if (!options.record_path.empty()) {
@@ -98,6 +112,18 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
       obstacles.set(std::span<const PolygonView>(seen_views.data(), seen),
                     std::span<const Vec2>(seen_velocities.data(), seen),
                     std::span<const double>(seen_turn_rates.data(), seen));
+    } else if (sight) {
+      seen = 0;
+      for (std::size_t i = 0; i < world.moverCount(); ++i) {
+        if (!sight->observe(world.time(), world.robot().pose.position(), i, views[i], velocities[i], 0.0)) continue;
+        seen_views[seen] = sight->footprint(i);
+        seen_velocities[seen] = sight->velocity(i);
+        seen_turn_rates[seen] = 0.0;
+        ++seen;
+      }
+      obstacles.set(std::span<const PolygonView>(seen_views.data(), seen),
+                    std::span<const Vec2>(seen_velocities.data(), seen),
+                    std::span<const double>(seen_turn_rates.data(), seen));
     } else {
       obstacles.set(views, velocities);
     }
@@ -107,7 +133,7 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
     in.obstacles = &obstacles;
     PlannerBudget budget = options.budget.make();
     if (recording) {
-      recording->agent(0).obstacles(camera ? record::ObstacleInputs{std::span<const PolygonView>(seen_views.data(), seen),
+      recording->agent(0).obstacles(camera || sight ? record::ObstacleInputs{std::span<const PolygonView>(seen_views.data(), seen),
                                                                     std::span<const Vec2>(seen_velocities.data(), seen),
                                                                     std::span<const double>(seen_turn_rates.data(), seen)}
                                            : record::ObstacleInputs{views, velocities, {}});

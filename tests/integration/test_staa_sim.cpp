@@ -270,7 +270,7 @@ TEST_F(StaaSim, BadInputExitsTwoNamingTheValue) {
       {{"--map", "map.yaml", "--start", "1,1,0", "--goal", "5,5,0"}, "--goal (5.00, 5.00, 0.00)"},
       {{"--scenario", "typo.yaml"}, "speeed"},
       {{"--scenario", "scenario.yaml", "--map", "map.yaml"}, "--map"},
-      {with(ok_goal, {"--obstacles", "lidar"}), "--obstacles: expected truth, depth or depth+scan, got 'lidar'"},
+      {with(ok_goal, {"--obstacles", "lidar"}), "--obstacles: expected truth, depth, depth+scan or sight, got 'lidar'"},
       {with(ok_goal, {"--robot", "robot.yaml", "--obstacles", "depth"}),
        "--obstacles depth: the robot profile 'robot.yaml' has no camera section"},
       {with(ok_goal, {"--robot", "robot.yaml", "--obstacles", "depth+scan"}),
@@ -330,6 +330,14 @@ TEST_F(StaaSim, DepthObstaclesDriveTheScenarioOnWhatTheCameraSees) {
   EXPECT_EQ(json("scan.json")["obstacles"], "depth+scan");
   EXPECT_TRUE(json("scan.json")["reached_goal"].get<bool>());
   EXPECT_EQ(json("scan.json")["collisions"], 0);
+  // The truth in the line of sight needs no sensor in the profile.
+  const SimRun l = sim({"--scenario", "scenario.yaml", "--obstacles", "sight", "--budget-expansions", "300",
+                        "--duration", "20", "--json", "sight.json", "--quiet"});
+  ASSERT_EQ(l.exit_code, 0) << l.err;
+  EXPECT_EQ(json("sight.json")["obstacles"], "sight");
+  EXPECT_TRUE(json("sight.json")["reached_goal"].get<bool>());
+  EXPECT_EQ(json("sight.json")["collisions"], 0);
+  EXPECT_FALSE(json("sight.json").contains("camera_frames"));
 }
 
 // ---- multi-agent runs (--agents N > 1 or --mode ghost) ----

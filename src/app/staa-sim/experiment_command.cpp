@@ -102,7 +102,9 @@ void addListOptions(CLI::App& app, Args& a) {
   cli::choice(app.add_option("--obstacles", s.obstacles,
                              "truth (every other agent's exact polygon and velocity), depth (what each evaluated "
                              "agent's depth camera sees, through staad's perception; the robot profile's camera), "
-                             "depth+scan (the camera and the profile's base laser scanner), or several side by side"),
+                             "depth+scan (the camera and the profile's base laser scanner), sight (the exact polygons of those "
+                             "in each agent's line of sight, 8 m all round: what occlusion alone costs), or several side "
+                             "by side"),
               cli::kObstacleNames, s.obstacles);
   app.add_option("--agents", s.agents, "Agent counts")
       ->delimiter(',')

@@ -690,13 +690,14 @@ void addOptions(staa::cli::CommandLine& cl, Args& a) {
   cli::choice(app.add_option("--heuristic", a.heuristic, "path-rtr, path-euclid or dijkstra-rtr"),
               cli::kHeuristicNames, a.heuristic);
   cli::choice(app.add_option("--blind-corners", a.blind_corners,
-                             "on or off: limit the speed at the map's blind corners so that the robot can stop within "
-                             "half the distance at which an agent behind them appears (ControlConfig::blind_corners)"),
+                             "on or off: limit the speed at the map's blind corners so that the robot can stop before it "
+                             "is level with one (ControlConfig::blind_corners)"),
               std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, a.blind_corners);
   cli::choice(app.add_option("--obstacles", a.obstacles,
                              "truth (the exact polygons and velocities of the movers or other agents), depth (what "
-                             "the robot profile's depth camera sees of them, through staad's perception) or depth+scan "
-                             "(the camera and the profile's base laser scanner)"),
+                             "the robot profile's depth camera sees of them, through staad's perception), depth+scan "
+                             "(the camera and the profile's base laser scanner) or sight (the exact polygons of those in "
+                             "the robot's line of sight, 8 m all round: what occlusion alone costs)"),
               cli::kObstacleNames, a.obstacles);
   app.add_option("--json", a.json_file, "Write the results as JSON to this file");
   app.add_option("--svg", a.svg_dir, "Write frames (frame_NNNNN.svg) into this directory: like the paper's Fig. 1 "

@@ -18,7 +18,7 @@ inline const std::vector<std::pair<std::string, ControllerKind>> kControllerName
 inline const std::vector<std::pair<std::string, SimMode>> kModeNames =
     namesOf({SimMode::kCooperative, SimMode::kGhost});
 inline const std::vector<std::pair<std::string, ObstacleSource>> kObstacleNames =
-    namesOf({ObstacleSource::kTruth, ObstacleSource::kDepth, ObstacleSource::kDepthScan});
+    namesOf({ObstacleSource::kTruth, ObstacleSource::kDepth, ObstacleSource::kDepthScan, ObstacleSource::kSight});
 inline const std::vector<std::pair<std::string, HeuristicKind>> kHeuristicNames =
     namesOf({HeuristicKind::kPathRtr, HeuristicKind::kPathEuclid, HeuristicKind::kDijkstraRtr});
 
