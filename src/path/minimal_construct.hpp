@@ -275,7 +275,6 @@ class MinimalConstruct {
   std::vector<std::uint32_t> static_cover_offsets_;
   std::vector<std::uint32_t> static_cover_;
   std::vector<Vec2> path_;
-  // Open-addressing set of blocked (node, node) edges, cleared in O(1) by a generation stamp.
   std::vector<std::int32_t> target_blocked_;  // nodes whose edge to the current start is blocked
   // reattachStart's parents for the start: closed nodes it can follow, by g + distance.
   struct StartCandidate {
@@ -288,6 +287,7 @@ class MinimalConstruct {
   };
   std::vector<StartCandidate> start_candidates_;
   bool start_candidates_heap_ = false;
+  // Open-addressing set of blocked (node, node) edges, cleared in O(1) by a generation stamp.
   std::vector<std::uint64_t> blocked_keys_;
   std::vector<std::uint32_t> blocked_gen_;
   std::uint32_t blocked_generation_ = 1;
