@@ -424,7 +424,7 @@ std::string obstacleScoresSvg(const std::vector<ExperimentCell>& cells, Heuristi
     }
     return -1;
   });
-  f.title = "Ground truth beside depth perception: score = goals reached - collisions (black), mean of " +
+  f.title = "Obstacle sources side by side: score = goals reached - collisions (black), mean of " +
             runsNote(cells) + "; STAA* with " + toString(staa_heuristic);
   return renderFigure(f);
 }

@@ -219,9 +219,6 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
                 : DepthObstaclesConfig{};
   const bool by_sight = options.obstacles == ObstacleSource::kSight;
   const LineOfSight line_of_sight(by_sight ? std::span<const Polygon>(map.obstacles) : std::span<const Polygon>());
-  SightConfig sight_config;
-  sight_config.range_m = kScanRangeM;
-  sight_config.keep_s = DepthObstaclesConfig{}.keep_unseen_s;
   std::vector<std::unique_ptr<SimAgent>> agents;
   agents.reserve(n);
   // Every agent plans against all the others: the capacity is raised to them if it is lower.
@@ -247,7 +244,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
                                                 options.obstacles == ObstacleSource::kDepthScan);
     }
     if (by_sight && a->perceives) {
-      a->sight = std::make_unique<SightObstacles>(line_of_sight, n, robot.footprint.size(), sight_config);
+      a->sight = std::make_unique<SightObstacles>(line_of_sight, n, robot.footprint.size(), SightConfig{});
     }
     agents.push_back(std::move(a));
   }

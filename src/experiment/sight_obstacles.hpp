@@ -9,17 +9,20 @@
 // lack the truth's view through walls. Its gap to the truth is what occlusion costs; the gap
 // from it to depth+scan is what the sensors' field, noise, latency and tracking cost.
 
+#include "experiment/agent_camera.hpp"
 #include "geometry/line_of_sight.hpp"
 #include "geometry/types.hpp"
+#include "perception/depth_obstacles.hpp"
 
 #include <cstddef>
 #include <vector>
 
 namespace staa {
 
+// The defaults are the depth+scan runs': the scanner's range, perception's keep_unseen_s.
 struct SightConfig {
-  double range_m = 8.0;  // the scanner's range in the depth+scan runs (kScanRangeM)
-  double keep_s = 1.5;   // perception's keep_unseen_s
+  double range_m = kScanRangeM;
+  double keep_s = DepthObstaclesConfig{}.keep_unseen_s;
 };
 
 class SightObstacles {

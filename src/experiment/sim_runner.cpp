@@ -55,16 +55,14 @@ SimResult runSingleRobot(const Scenario& scenario, const SimOptions& options) {
                                            options.obstacles == ObstacleSource::kDepthScan);
   }
   // Sight: the movers in the robot's line of sight, exactly.
-  std::unique_ptr<LineOfSight> line_of_sight;
+  const bool by_sight = options.obstacles == ObstacleSource::kSight;
+  const LineOfSight line_of_sight(by_sight ? std::span<const Polygon>(scenario.map.obstacles)
+                                           : std::span<const Polygon>());
   std::unique_ptr<SightObstacles> sight;
-  if (options.obstacles == ObstacleSource::kSight) {
-    line_of_sight = std::make_unique<LineOfSight>(scenario.map.obstacles);
+  if (by_sight) {
     std::size_t vertices = 0;
     for (std::size_t i = 0; i < world.moverCount(); ++i) vertices = std::max(vertices, world.moverPolygon(i).size());
-    SightConfig config;
-    config.range_m = kScanRangeM;
-    config.keep_s = DepthObstaclesConfig{}.keep_unseen_s;
-    sight = std::make_unique<SightObstacles>(*line_of_sight, world.moverCount(), vertices, config);
+    sight = std::make_unique<SightObstacles>(line_of_sight, world.moverCount(), vertices, SightConfig{});
   }
   std::unique_ptr<record::SimRecording> recording;
   if (!options.record_path.empty()) {
