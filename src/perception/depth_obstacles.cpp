@@ -35,7 +35,8 @@ std::string number(double v) { return io::numberText(v); }
 
 // The constant-velocity Kalman filter of a track (the same gain for x and y): predict over
 // dt with white acceleration noise, then update with the measured centroid.
-void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, double dt, double noise_m) const {
+void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, double dt, double noise_m,
+                                           const Vec2& blind) const {
   const double q = config_.acceleration_mps2 * config_.acceleration_mps2;
   const double dt2 = dt * dt;
   const double p00 = tr.p00 + 2.0 * dt * tr.p01 + dt2 * tr.p11 + q * dt2 * dt2 / 4.0;
@@ -45,12 +46,52 @@ void DepthObstacleDetector::filterCentroid(Track& tr, const Vec2& measured, doub
   const double k0 = p00 / innovation_var, k1 = p01 / innovation_var;
   const Vec2 innovation = measured - (tr.centroid + tr.velocity * dt);
   tr.centroid += tr.velocity * dt + k0 * innovation;
-  tr.velocity += k1 * innovation;
+  // A centroid moved by a cut across the beam (`blind`, a unit vector or 0) says nothing of the
+  // velocity that way.
+  tr.velocity += k1 * (innovation - blind * blind.dot(innovation));
   tr.p00 = (1.0 - k0) * p00;
   tr.p01 = (1.0 - k0) * p01;
   tr.p11 = p11 - k1 * p01;
   const double speed = tr.velocity.norm();
   if (speed > config_.max_speed_mps) tr.velocity *= config_.max_speed_mps / speed;
+}
+
+// A body cut off on one side only (findCuts) has a free end, its silhouette on the scan, which
+// moves with the body while the centroid moves with the cut. Across the beam the free end is
+// placed to the beams' spacing, along it (on a face seen at a grazing angle) hardly at all.
+DepthObstacleDetector::FreeEnd DepthObstacleDetector::freeEnd(const Cluster& cl) const {
+  FreeEnd end;
+  if (cl.truncated || cl.cut_lo == cl.cut_hi) return end;
+  end.side = cl.cut_lo ? 1 : -1;
+  end.point = end.side > 0 ? cl.edge_hi : cl.edge_lo;
+  const Vec2 beam = end.point - scan_sensor_;
+  if (!(beam.norm() > 0.0)) return FreeEnd{};
+  end.across = Vec2(-beam.y(), beam.x()).normalized();
+  return end;
+}
+
+// The free end's displacement across the beam since the previous frame measures the velocity
+// across, with a return's noise at either end (taken as the centroid's). The filter's
+// covariance is the same in every direction and this measures one, so it is left as it was:
+// the track gets no surer of the direction the scan did not measure.
+void DepthObstacleDetector::followFreeEnd(Track& tr, const FreeEnd& end, rt::Nanos stamp) const {
+  if (end.side == 0) {
+    tr.edge_side = 0;
+    return;
+  }
+  const double dt = static_cast<double>(stamp - tr.edge_seen) * 1e-9;
+  if (tr.edge_side == end.side && dt > 0.0 && dt <= config_.max_frame_gap_s) {
+    const double noise = std::sqrt(2.0) * config_.centroid_noise_m / dt;
+    const double innovation = end.across.dot(end.point - tr.edge) / dt - end.across.dot(tr.velocity);
+    const double s = tr.p11 + noise * noise;
+    tr.centroid += (tr.p01 / s * innovation) * end.across;
+    tr.velocity += (tr.p11 / s * innovation) * end.across;
+    const double speed = tr.velocity.norm();
+    if (speed > config_.max_speed_mps) tr.velocity *= config_.max_speed_mps / speed;
+  }
+  tr.edge = end.point;
+  tr.edge_side = end.side;
+  tr.edge_seen = stamp;
 }
 
 // The turn rate: how far the filtered velocity's direction turned over dt, smoothed with a
@@ -238,6 +279,7 @@ DepthObstaclesStats DepthObstacleDetector::process(const hal::DepthFrame& frame,
   scan_ = nullptr;
   if (scan.scan != nullptr) addScan(scan, stats);
   findClusters(robot, stats);
+  findCuts();
   outlineClusters(out);
   trackClusters(frame.stamp, out);
   out.dropped = stats.clusters - kept_;
@@ -435,6 +477,7 @@ void DepthObstacleDetector::findClusters(const Pose2& robot, DepthObstaclesStats
     cl.distance = (cl.centroid - robot.position()).norm();
     cl.track = -1;
     cl.truncated = truncated;
+    cl.label = id;
   }
 
   // The nearest kMaxObstacles, nearest first (ties in scan order, so the result is the same
@@ -449,6 +492,66 @@ void DepthObstacleDetector::findClusters(const Pose2& robot, DepthObstaclesStats
   const auto end = order_.begin() + static_cast<std::ptrdiff_t>(cluster_count_);
   if (cluster_count_ > kept_) std::nth_element(begin, begin + static_cast<std::ptrdiff_t>(kept_), end, nearer);
   std::sort(begin, begin + static_cast<std::ptrdiff_t>(kept_), nearer);
+}
+
+// Step 2b: the scan's first and last beam on each cluster, and whether a nearer return just
+// beyond either (by more than two cells: nearer than the grid can place the body's own edge)
+// hides the rest of the body there. Beams without a return, or past the sweep's ends, hide
+// nothing (the sweep's ends truncate, as the image's edges do).
+void DepthObstacleDetector::findCuts() {
+  for (std::size_t c = 0; c < cluster_count_; ++c) {
+    Cluster& cl = clusters_[c];
+    cl.beam_lo = cl.beam_hi = -1;
+    cl.cut_lo = cl.cut_hi = false;
+  }
+  if (scan_ == nullptr || cluster_count_ == 0) return;
+  const hal::LaserScan& scan = *scan_;
+  const double inv_cell = 1.0 / config_.cell_m;
+  const double ax = (scan_sensor_.x() - origin_.x()) * inv_cell, ay = (scan_sensor_.y() - origin_.y()) * inv_cell;
+  const double n = n_;
+  const double ci = std::cos(scan.angle_increment), si = std::sin(scan.angle_increment);
+  double dx = std::cos(scan_zero_) * inv_cell, dy = std::sin(scan_zero_) * inv_cell;
+  const auto valid = [&scan](double r) { return r >= scan.range_min && r <= scan.range_max; };
+  Cluster* const first = clusters_.data();
+  Cluster* const last = first + cluster_count_;
+  for (std::size_t i = 0; i < scan.count; ++i) {
+    const double r = scan.ranges[i];
+    const double x = dx, y = dy;
+    dx = ci * x - si * y;
+    dy = si * x + ci * y;
+    if (!valid(r)) continue;
+    const double gx = ax + r * x, gy = ay + r * y;
+    if (!(gx >= 0.0 && gx < n && gy >= 0.0 && gy < n)) continue;
+    const std::int32_t id =
+        label_[static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) + static_cast<std::size_t>(gx)];
+    if (id <= 0) continue;
+    // Clusters are numbered in the order they were found: a binary search by id.
+    Cluster* const cl = std::lower_bound(first, last, id, [](const Cluster& c, std::int32_t v) { return c.label < v; });
+    if (cl == last || cl->label != id) continue;  // too few points to be a cluster
+    const Vec2 end = origin_ + config_.cell_m * Vec2(gx, gy);
+    if (cl->beam_lo < 0) {
+      cl->beam_lo = static_cast<int>(i);
+      cl->edge_lo = end;
+    }
+    cl->beam_hi = static_cast<int>(i);
+    cl->edge_hi = end;
+  }
+  const double margin = 2.0 * config_.cell_m;
+  const auto count = static_cast<int>(scan.count);
+  const auto hidden = [&](int beam, int step) {
+    const double r = static_cast<double>(scan.ranges[static_cast<std::size_t>(beam)]);
+    for (int b = beam + step; b != beam + 3 * step; b += step) {
+      if (b < 0 || b >= count) return false;
+      const double beside = scan.ranges[static_cast<std::size_t>(b)];
+      if (valid(beside) && beside < r - margin) return true;
+    }
+    return false;
+  };
+  for (Cluster* cl = first; cl != last; ++cl) {
+    if (cl->beam_lo < 0) continue;
+    cl->cut_lo = hidden(cl->beam_lo, -1);
+    cl->cut_hi = hidden(cl->beam_hi, +1);
+  }
 }
 
 // Step 3: a convex polygon per kept cluster.
@@ -559,7 +662,9 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
     cl.track = static_cast<int>(best_t);
     const double dt = static_cast<double>(stamp - tr.seen) * 1e-9;
     const Vec2 velocity_before = tr.velocity;
-    filterCentroid(tr, cl.centroid, dt, cl.truncated ? config_.truncated_noise_m : config_.centroid_noise_m);
+    const FreeEnd end = freeEnd(cl);
+    filterCentroid(tr, cl.centroid, dt, cl.cut() ? config_.truncated_noise_m : config_.centroid_noise_m, end.across);
+    followFreeEnd(tr, end, stamp);
     filterTurnRate(tr, velocity_before, dt);
     tr.seen = stamp;
     tr.missed = 0;
@@ -575,9 +680,10 @@ void DepthObstacleDetector::trackClusters(rt::Nanos stamp, hal::ObstacleFrame& o
         if (tracks_[t].live) continue;
         // At rest, its position known to the centroid's noise, its velocity to about half the
         // largest speed.
-        const double r = cl.truncated ? config_.truncated_noise_m : config_.centroid_noise_m;
+        const double r = cl.cut() ? config_.truncated_noise_m : config_.centroid_noise_m;
         const double v = 0.5 * config_.max_speed_mps;
         tracks_[t] = Track{true, cl.centroid, Vec2::Zero(), r * r, 0.0, v * v, stamp, 0, 0.0, 1};
+        followFreeEnd(tracks_[t], freeEnd(cl), stamp);
         cl.track = static_cast<int>(t);
         break;
       }

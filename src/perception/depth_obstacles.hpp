@@ -14,10 +14,18 @@
 //   3. outlineClusters: one convex polygon per cluster, the hull of its cells' corners (the
 //                       hull of the cell centres grown by half a cell), conservatively reduced
 //                       to max_vertices (it only grows);
+//   3b. findCuts:       with a scan, the clusters it sees only in part: a nearer return just
+//                       beyond a cluster's first or last beam (a wall's corner, another body)
+//                       cuts the body off there;
 //   4. trackClusters:   each cluster is matched to the nearest predicted track within a gate;
 //                       a constant-velocity Kalman filter on its point centroid gives the
 //                       velocity (the smoothed displacement over the time between frames); a
-//                       new track starts at 0 m/s. The turn rate is the smoothed rate at
+//                       new track starts at 0 m/s. A cut cluster's centroid moves with the
+//                       cut (a body coming out from behind a corner grows into view): it is
+//                       trusted as little as one cut by the image's edge, and the free end of
+//                       the body, its silhouette on the scan, gives the velocity across the
+//                       beam instead (its displacement between frames). The turn rate is the
+//                       smoothed rate at
 //                       which that velocity's direction turns (0 for slow tracks);
 //   5. keepUnseenTracks: a track not seen this frame is forgotten after max_missed_frames if
 //                       the camera should have seen it (its place in the image, in range, not
@@ -218,6 +226,14 @@ class DepthObstacleDetector {
     double distance = 0.0;    // centroid to the robot
     int track = -1;
     bool truncated = false;   // some of its points come from the image's left or right edge
+    std::int32_t label = 0;   // its id in label_
+    // The scan's first and last beam on it (-1: none), their returns (map frame), and whether
+    // a nearer return just beyond either end hides the rest of the body there.
+    int beam_lo = -1, beam_hi = -1;
+    Vec2 edge_lo{0.0, 0.0}, edge_hi{0.0, 0.0};
+    bool cut_lo = false, cut_hi = false;
+    // Cut off by the image's or the sweep's edge, or by something nearer.
+    bool cut() const { return truncated || cut_lo || cut_hi; }
   };
   struct Track {
     bool live = false;
@@ -233,6 +249,11 @@ class DepthObstacleDetector {
     // Its outline when last seen, relative to `centroid`.
     std::array<Vec2, hal::ObstacleFrame::kMaxVertices> outline{};
     std::size_t outline_n = 0;
+    // While the body was cut off on one side: its free end's return, which end (-1: the first
+    // beam's, +1: the last's, 0: none) and when.
+    Vec2 edge{0.0, 0.0};
+    int edge_side = 0;
+    rt::Nanos edge_seen = -1;
   };
 
   // The sampled rays of a camera with this rotation and position (base frame) into `out`,
@@ -246,6 +267,7 @@ class DepthObstacleDetector {
   // range, and its beam there not stopped by something nearer.
   bool scanSees(const Vec2& p) const;
   void findClusters(const Pose2& robot, DepthObstaclesStats& stats);
+  void findCuts();
   void outlineClusters(hal::ObstacleFrame& out);
   void trackClusters(rt::Nanos stamp, hal::ObstacleFrame& out);
   void keepUnseenTracks(const hal::DepthFrame& frame, const Pose2& robot, hal::ObstacleFrame& out);
@@ -257,7 +279,18 @@ class DepthObstacleDetector {
   // r, or less so that the outline grown by it stays self_clearance_m from the base centre.
   double clearOfSelf(std::span<const Vec2> outline, double r) const;
   std::size_t outline(const Cluster& cluster, std::span<Vec2> out);
-  void filterCentroid(Track& track, const Vec2& measured, double dt, double noise_m) const;
+  void filterCentroid(Track& track, const Vec2& measured, double dt, double noise_m,
+                      const Vec2& blind = Vec2::Zero()) const;
+  // A cluster cut off on one side only: its other end (side -1: the first beam's, +1: the
+  // last's, 0: no such end), and the unit vector across the beam there.
+  struct FreeEnd {
+    int side = 0;
+    Vec2 point{0.0, 0.0};
+    Vec2 across{0.0, 0.0};
+  };
+  FreeEnd freeEnd(const Cluster& cluster) const;
+  // The free end's motion feeds the track's velocity across the beam (trackClusters).
+  void followFreeEnd(Track& track, const FreeEnd& end, rt::Nanos stamp) const;
   void filterTurnRate(Track& track, const Vec2& velocity_before, double dt) const;
 
   DepthObstaclesConfig config_;
