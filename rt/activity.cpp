@@ -64,13 +64,16 @@ void PeriodicActivity::run() {
     // The body's own CPU time and its measured stalls tell an execution overrun (ours) from
     // a body kept off the CPU (the platform's: preemption, a virtual machine's stolen time).
     // Voluntary switches tell a body that blocked (ours) from one that was stopped.
+    // Page faults beside them: a blocked cycle that also faulted waited on memory, not a lock.
     const std::int64_t sw0 = clock_.voluntarySwitches();
+    const std::int64_t pf0 = clock_.pageFaults();
     const Nanos cpu0 = clock_.threadCpuTime();
     runnable_.step(wake.woke);
     const Nanos cpu1 = clock_.threadCpuTime();
+    const std::int64_t pf1 = clock_.pageFaults();
     const std::int64_t sw1 = clock_.voluntarySwitches();
     loop.finish(cpu0 >= 0 && cpu1 >= 0 ? cpu1 - cpu0 : -1, runnable_.lastStall(),
-                sw0 >= 0 && sw1 >= 0 ? sw1 - sw0 : -1);
+                sw0 >= 0 && sw1 >= 0 ? sw1 - sw0 : -1, pf0 >= 0 && pf1 >= 0 ? pf1 - pf0 : -1);
     counters_.store(loop.counters());
   }
   runnable_.stop(clock_.now());

@@ -41,6 +41,12 @@ std::int64_t threadVoluntarySwitches() {
   return static_cast<std::int64_t>(ru.ru_nvcsw);
 }
 
+std::int64_t threadPageFaults() {
+  rusage ru{};
+  if (getrusage(RUSAGE_THREAD, &ru) != 0) return -1;
+  return static_cast<std::int64_t>(ru.ru_minflt) + static_cast<std::int64_t>(ru.ru_majflt);
+}
+
 Nanos MonotonicClock::now() const { return monotonicNow(); }
 
 Clock::NowFunction MonotonicClock::nowFunction() const { return &monotonicNow; }

@@ -25,6 +25,12 @@ Nanos threadCpuTime();
 // blocked (ours) from one the platform stopped.
 std::int64_t threadVoluntarySwitches();
 
+// Page faults of the calling thread so far (getrusage RUSAGE_THREAD's ru_minflt + ru_majflt),
+// -1 if unavailable. With memory locked and prefaulted a cycle should take none: one that did
+// touched memory never touched before, or the kernel moved a locked page (compaction), and a
+// fault that waited is also a voluntary switch.
+std::int64_t threadPageFaults();
+
 class Clock {
  public:
   // The clock read through a plain function pointer (path/deadline.hpp's ClockFn is one).
@@ -40,6 +46,8 @@ class Clock {
   virtual Nanos threadCpuTime() const { return -1; }
   // The calling thread's voluntary context switches so far; -1 when the clock has none.
   virtual std::int64_t voluntarySwitches() const { return -1; }
+  // The calling thread's page faults so far; -1 when the clock has none.
+  virtual std::int64_t pageFaults() const { return -1; }
   // now() as a plain function, or nullptr when the clock lives in an object (a test's).
   virtual NowFunction nowFunction() const { return nullptr; }
 };
@@ -51,6 +59,7 @@ class MonotonicClock final : public Clock {
   int sleepUntil(Nanos deadline) override;
   Nanos threadCpuTime() const override { return rt::threadCpuTime(); }
   std::int64_t voluntarySwitches() const override { return rt::threadVoluntarySwitches(); }
+  std::int64_t pageFaults() const override { return rt::threadPageFaults(); }
   NowFunction nowFunction() const override;
 };
 

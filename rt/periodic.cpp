@@ -42,9 +42,17 @@ std::uint64_t PeriodicLoop::finish(Nanos cpu_time) { return finish(cpu_time, 0);
 std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall) { return finish(cpu_time, stall, -1); }
 
 std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall, std::int64_t switches) {
+  return finish(cpu_time, stall, switches, -1);
+}
+
+std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall, std::int64_t switches, std::int64_t faults) {
   const Nanos now = clock_.now();
   const bool blocked = switches > 0;
-  if (blocked) ++counters_.blocked_cycles;
+  if (blocked) {
+    ++counters_.blocked_cycles;
+    counters_.last_blocked_cycle = counters_.cycles + 1;
+  }
+  if (faults > 0) ++counters_.faulted_cycles;
   last_exec_ = now - last_wake_.woke;
   exec_.record(last_exec_);
   ++counters_.cycles;

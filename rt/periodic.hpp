@@ -43,6 +43,10 @@ struct PeriodicCounters {
   // Cycles whose body blocked (a voluntary context switch), overrun or not: a real-time
   // body never should, so any is a defect to find, like an allocation.
   std::uint64_t blocked_cycles = 0;
+  // Cycles whose body took a page fault, and the index of the last cycle that blocked (0: none;
+  // k + 1 for cycle k): what a blocked cycle's report needs to tell a fault's wait from a lock's.
+  std::uint64_t faulted_cycles = 0;
+  std::uint64_t last_blocked_cycle = 0;
   // The longest body less its stall (a gap >= kStallGap, when one was measured): the
   // longest the body's own work took, the platform's stalls taken out.
   Nanos max_own_execution = 0;
@@ -81,6 +85,9 @@ class PeriodicLoop {
   // The same, with the body's voluntary context switches (`switches`, < 0 when not measured):
   // a body that switched is counted in blocked_cycles, and its overrun is ours.
   std::uint64_t finish(Nanos cpu_time, Nanos stall, std::int64_t switches);
+  // The same, with the body's page faults (`faults`, < 0 when not measured), counted in
+  // faulted_cycles.
+  std::uint64_t finish(Nanos cpu_time, Nanos stall, std::int64_t switches, std::int64_t faults);
 
   Nanos period() const { return period_; }
   Nanos nextDeadline() const { return deadline_; }

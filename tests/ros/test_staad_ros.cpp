@@ -374,11 +374,15 @@ TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocate
                                    milliseconds(60'000));
   ASSERT_TRUE(thousand);
   EXPECT_EQ((*thousand)["rt_allocations"], 0);
-  EXPECT_EQ((*thousand)["blocked_cycles"], 0) << "a control cycle blocked (the ROS bridge must never make it wait)";
-  EXPECT_EQ((*thousand)["threads"]["base"]["blocked_cycles"], 0) << "a base cycle blocked";
+  // A blocked cycle's report: which cycle, and whether the control thread's cycles faulted.
+  EXPECT_EQ((*thousand)["blocked_cycles"], 0)
+      << "a control cycle blocked (the ROS bridge must never make it wait): last_blocked_cycle "
+      << (*thousand)["last_blocked_cycle"] << ", faulted_cycles " << (*thousand)["faulted_cycles"] << ", cycle "
+      << (*thousand)["cycle"].dump();
+  EXPECT_EQ((*thousand)["threads"]["base"]["blocked_cycles"], 0) << "a base cycle blocked: " << (*thousand)["threads"]["base"].dump();
   std::cout << "1,000 cycles after " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
             << " s: " << (*thousand)["cycle"].dump() << "; odometry to twist " << (*thousand)["ros"]["odometry_to_twist"].dump()
-            << "\n";
+            << "; faulted cycles " << (*thousand)["faulted_cycles"] << "\n";
   record.kill(SIGINT);
   const std::optional<int> recorded = record.wait(milliseconds(30'000));
   ASSERT_TRUE(recorded.has_value()) << "the recorder did not close the bag within 30 s: " << record.err();

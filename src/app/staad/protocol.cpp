@@ -332,6 +332,8 @@ void addThreadJson(Json& j, const rt::ActivityTiming& t, std::uint64_t count) {
   j["preempted"] = t.counters.preempted;
   j["stalls"] = t.counters.stalls;
   j["blocked_cycles"] = t.counters.blocked_cycles;
+  j["faulted_cycles"] = t.counters.faulted_cycles;
+  j["last_blocked_cycle"] = t.counters.last_blocked_cycle;
   // The longest cycle less its measured stall: the cycle's own work at its longest.
   j["own_execution_max_us"] = static_cast<double>(t.counters.max_own_execution) * 1e-3;
   j["skipped_periods"] = t.counters.skipped_periods;
@@ -479,6 +481,7 @@ nlohmann::json histogramsJson(std::span<const ThreadHistograms> threads) {
                                {"stall", c.stalls}}},
                  {"own_execution_max_us", static_cast<double>(c.max_own_execution) * 1e-3},
                  {"blocked_cycles", c.blocked_cycles},
+                 {"faulted_cycles", c.faulted_cycles},
                  {"realtime", t.activity->realtime()}};
   }
   return j;

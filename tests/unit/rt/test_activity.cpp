@@ -9,7 +9,9 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -211,8 +213,53 @@ TEST(PeriodicActivity, CountsTheCyclesWhoseBodyBlockedOnTheMonotonicClock) {
     ASSERT_GE(c.cycles, 20u);
     if (sleeps) {
       EXPECT_EQ(c.blocked_cycles, c.cycles) << "every body slept";
+      EXPECT_EQ(c.last_blocked_cycle, c.cycles) << "the last cycle (index cycles - 1, reported + 1) blocked";
     } else {
       EXPECT_EQ(c.blocked_cycles, 0u) << "no body of pure arithmetic may count as blocked";
+      EXPECT_EQ(c.last_blocked_cycle, 0u);
+    }
+  }
+}
+
+// A body that touches a page it never touched before faults in that cycle; one that only
+// computes on its registers does not.
+class Toucher final : public Runnable {
+ public:
+  explicit Toucher(bool touches) : touches_(touches) {}
+  void start(const PeriodicLoop&) override {}
+  void step(Nanos) override {
+    if (touches_ && next_ < kPages) {
+      // Untouched pages of one big allocation (served by mmap, mapped on first touch).
+      pages_[next_ * kPage] = 1;
+      ++next_;
+    }
+    steps.fetch_add(1, std::memory_order_relaxed);
+  }
+  void stop(Nanos) override {}
+  static constexpr std::size_t kPage = 4096, kPages = 64;
+  std::atomic<int> steps{0};
+
+ private:
+  bool touches_;
+  std::unique_ptr<volatile char[]> pages_{new volatile char[(kPages + 1) * kPage]};
+  std::size_t next_ = 0;
+};
+
+TEST(PeriodicActivity, CountsTheCyclesWhoseBodyTookAPageFault) {
+  if (threadPageFaults() < 0) GTEST_SKIP() << "getrusage(RUSAGE_THREAD) is not available here";
+  for (const bool touches : {true, false}) {
+    MonotonicClock clock;
+    Toucher body(touches);
+    PeriodicActivity activity(touches ? "toucher" : "computer", body, clock, 2 * kMs);
+    activity.start(normalThread());
+    while (body.steps.load(std::memory_order_relaxed) < 20) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    activity.stop();
+    const PeriodicCounters c = activity.counters();
+    ASSERT_GE(c.cycles, 20u);
+    if (touches) {
+      EXPECT_GE(c.faulted_cycles, 20u) << "a new page in each of the first 64 cycles";
+    } else {
+      EXPECT_EQ(c.faulted_cycles, 0u) << "no body that touches no new memory may count as faulted";
     }
   }
 }
