@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""STAA*'s score with ground truth, the head camera (depth) and the camera with the base
-scanner (depth+scan), per map, mode and agent count: docs/results/perception/scores.svg.
+"""STAA*'s score with ground truth, the truth within each agent's line of sight (sight), the
+head camera (depth) and the camera with the base scanner (depth+scan), per map, mode and agent
+count: docs/results/perception/scores.svg.
 
 usage: figure.py OUT.svg SUMMARY.json  (SUMMARY.json: summary.py's output)
 Each bar is the mean score of 5 runs, its whisker one standard deviation; the number above
@@ -8,8 +9,8 @@ it is the runs' collisions (of all agents, each agent of a pair counted)."""
 import json
 import sys
 
-SOURCES = [('truth', '#2a9d6a', 'ground truth'), ('depth', '#e08a2c', 'camera (depth)'),
-           ('depth+scan', '#5b7fc7', 'camera + base scanner (depth+scan)')]
+SOURCES = [('truth', '#2a9d6a', 'ground truth'), ('sight', '#9bc9a0', 'truth in line of sight'),
+           ('depth', '#e08a2c', 'camera (depth)'), ('depth+scan', '#5b7fc7', 'camera + scanner (depth+scan)')]
 MAPS = ['office', 'apartment', 'clutter', 'depot']
 MODES = ['cooperative', 'ghost']
 
@@ -27,7 +28,7 @@ def main(out, summary_path):
            f'<rect width="{width}" height="{height}" fill="white"/>',
            f'<text x="{left}" y="18" font-size="14">STAA*: score per 60 s run (mean, one standard deviation; collisions above)</text>']
     for k, (_, colour, label) in enumerate(SOURCES):
-        x = left + k * 200
+        x = left + k * 195
         svg.append(f'<rect x="{x}" y="28" width="12" height="12" fill="{colour}"/><text x="{x + 16}" y="38">{label}</text>')
     for r, n in enumerate(agents):
         y0 = top + r * row_h + 10
