@@ -9,6 +9,7 @@
 #include "map/polygon_map.hpp"
 #include "shared_dir.hpp"
 #include "world/scenario.hpp"
+#include "world/sim_laser_scan.hpp"
 
 #include <memory>
 
@@ -39,5 +40,13 @@ inline Mover boxMover(const Vec2& from, const Vec2& to, double speed, double hal
 }
 
 inline std::unique_ptr<hal::DepthFrame> newFrame() { return std::make_unique<hal::DepthFrame>(); }
+
+// A UST-20LX-like base scanner at the base centre, 0.2 m up, 1 cm range noise.
+inline hal::SimScanConfig baseScannerConfig() {
+  hal::SimScanConfig c;
+  c.mount = hal::ScanMount{0.0, 0.0, 0.2, 0.0};
+  c.noise_m = 0.01;
+  return c;
+}
 
 }  // namespace staa::test

@@ -40,19 +40,13 @@ struct Scene {
       : map(boxRoom()),
         world(map, test::hsrProfile(), Pose2{0.0, 0.0, 0.5 * kPi}, {Mover{test::square(kHalf), {from, to}, speed}}),
         camera(world, cameraConfig()),
-        scanner(map, scannerConfig()),
+        scanner(map, test::baseScannerConfig()),
         detector(map, camera.intrinsics(), camera.mount(), config),
         frame(test::newFrame()),
         scan(std::make_unique<hal::LaserScan>()) {}
   static hal::SimDepthConfig cameraConfig() {
     hal::SimDepthConfig c;
     c.mount = test::hsrHeadMount();
-    return c;
-  }
-  static hal::SimScanConfig scannerConfig() {
-    hal::SimScanConfig c;
-    c.mount = hal::ScanMount{0.0, 0.0, 0.2, 0.0};
-    c.noise_m = 0.01;
     return c;
   }
   void step() {

@@ -41,7 +41,7 @@ struct Scene {
   explicit Scene(std::vector<Mover> movers)
       : world(test::officeMap(), test::hsrProfile(), test::kCorridorStart, std::move(movers)),
         camera(world, cameraConfig()),
-        scanner(test::officeMap(), scannerConfig()),
+        scanner(test::officeMap(), test::baseScannerConfig()),
         with_scan(test::officeMap(), camera.intrinsics(), camera.mount()),
         camera_only(test::officeMap(), camera.intrinsics(), camera.mount()),
         frame(test::newFrame()),
@@ -54,12 +54,6 @@ struct Scene {
     hal::SimDepthConfig c;
     c.mount = test::hsrHeadMount();
     c.noise_mm_per_m2 = 1.5;
-    return c;
-  }
-  static hal::SimScanConfig scannerConfig() {
-    hal::SimScanConfig c;
-    c.mount = hal::ScanMount{0.0, 0.0, 0.2, 0.0};
-    c.noise_m = 0.01;
     return c;
   }
 

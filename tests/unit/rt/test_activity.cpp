@@ -200,16 +200,23 @@ class Sleeper final : public Runnable {
   bool sleeps_;
 };
 
+// Runs `body` (with a `steps` counter) every 2 ms on the monotonic clock until it has been
+// stepped 20 times, and returns the activity's counters.
+template <class Body>
+PeriodicCounters runTwentySteps(const char* name, Body& body) {
+  MonotonicClock clock;
+  PeriodicActivity activity(name, body, clock, 2 * kMs);
+  activity.start(normalThread());
+  while (body.steps.load(std::memory_order_relaxed) < 20) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  activity.stop();
+  return activity.counters();
+}
+
 TEST(PeriodicActivity, CountsTheCyclesWhoseBodyBlockedOnTheMonotonicClock) {
   if (threadVoluntarySwitches() < 0) GTEST_SKIP() << "getrusage(RUSAGE_THREAD) is not available here";
   for (const bool sleeps : {true, false}) {
-    MonotonicClock clock;
     Sleeper body(sleeps);
-    PeriodicActivity activity(sleeps ? "sleeper" : "computer", body, clock, 2 * kMs);
-    activity.start(normalThread());
-    while (body.steps.load(std::memory_order_relaxed) < 20) std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    activity.stop();
-    const PeriodicCounters c = activity.counters();
+    const PeriodicCounters c = runTwentySteps(sleeps ? "sleeper" : "computer", body);
     ASSERT_GE(c.cycles, 20u);
     if (sleeps) {
       EXPECT_EQ(c.blocked_cycles, c.cycles) << "every body slept";
@@ -248,13 +255,8 @@ class Toucher final : public Runnable {
 TEST(PeriodicActivity, CountsTheCyclesWhoseBodyTookAPageFault) {
   if (threadPageFaults() < 0) GTEST_SKIP() << "getrusage(RUSAGE_THREAD) is not available here";
   for (const bool touches : {true, false}) {
-    MonotonicClock clock;
     Toucher body(touches);
-    PeriodicActivity activity(touches ? "toucher" : "computer", body, clock, 2 * kMs);
-    activity.start(normalThread());
-    while (body.steps.load(std::memory_order_relaxed) < 20) std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    activity.stop();
-    const PeriodicCounters c = activity.counters();
+    const PeriodicCounters c = runTwentySteps(touches ? "toucher" : "computer", body);
     ASSERT_GE(c.cycles, 20u);
     if (touches) {
       EXPECT_GE(c.faulted_cycles, 20u) << "a new page in each of the first 64 cycles";
