@@ -53,6 +53,7 @@ std::uint64_t PeriodicLoop::finish(Nanos cpu_time, Nanos stall, std::int64_t swi
     counters_.last_blocked_cycle = counters_.cycles + 1;
   }
   if (faults > 0) ++counters_.faulted_cycles;
+  if (blocked && faults > 0) ++counters_.blocked_faulted_cycles;
   last_exec_ = now - last_wake_.woke;
   exec_.record(last_exec_);
   ++counters_.cycles;

@@ -47,6 +47,8 @@ struct PeriodicCounters {
   // k + 1 for cycle k): what a blocked cycle's report needs to tell a fault's wait from a lock's.
   std::uint64_t faulted_cycles = 0;
   std::uint64_t last_blocked_cycle = 0;
+  // Cycles that blocked and faulted: waits on memory (a fault that waited), not on a lock.
+  std::uint64_t blocked_faulted_cycles = 0;
   // The longest body less its stall (a gap >= kStallGap, when one was measured): the
   // longest the body's own work took, the platform's stalls taken out.
   Nanos max_own_execution = 0;

@@ -9,6 +9,7 @@
 #include "child_process.hpp"
 #include "read_file.hpp"
 #include "shared_dir.hpp"
+#include "blocked_cycles.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -103,7 +104,7 @@ TEST_F(StaadDepth, DrivesToTheGoalOnRenderedDepthFrames) {
   EXPECT_LE(std::hypot(s["pose"][0].get<double>() - 10.5, s["pose"][1].get<double>() - 4.5), 0.22) << json;
   EXPECT_TRUE(s["fault"].is_null()) << json;
   EXPECT_EQ(s["rt_allocations"], 0) << json;
-  EXPECT_EQ(s["blocked_cycles"], 0) << "a control cycle blocked: " << json;
+  EXPECT_TRUE(staa::test::noBlockedCycle(s)) << "a control cycle blocked: " << json;
   // Depth frames keep arriving at 30 Hz.
   EXPECT_GE(s["staleness"]["obstacles_s"].get<double>(), 0.0);
   EXPECT_LT(s["staleness"]["obstacles_s"].get<double>(), 0.2) << json;
@@ -136,7 +137,7 @@ TEST_F(StaadDepth, DrivesToTheGoalWithTheSimScannerBesideTheCamera) {
   ASSERT_TRUE(s.is_object()) << json;
   EXPECT_EQ(s["state"], "reached");
   EXPECT_EQ(s["rt_allocations"], 0) << json;
-  EXPECT_EQ(s["blocked_cycles"], 0) << json;
+  EXPECT_TRUE(staa::test::noBlockedCycle(s)) << json;
   const auto& scanner = s["scanner"];
   ASSERT_TRUE(scanner.is_object()) << json;
   EXPECT_EQ(scanner["backend"], "sim");

@@ -10,6 +10,7 @@
 #include "rt/unix_socket.hpp"
 #include "shared_dir.hpp"
 #include "visibility_reference.hpp"
+#include "blocked_cycles.hpp"
 
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
@@ -374,12 +375,8 @@ TEST_F(StaadOverRos, MarkersParseABagRecordsEveryTopicAndAThousandCyclesAllocate
                                    milliseconds(60'000));
   ASSERT_TRUE(thousand);
   EXPECT_EQ((*thousand)["rt_allocations"], 0);
-  // A blocked cycle's report: which cycle, and whether the control thread's cycles faulted.
-  EXPECT_EQ((*thousand)["blocked_cycles"], 0)
-      << "a control cycle blocked (the ROS bridge must never make it wait): last_blocked_cycle "
-      << (*thousand)["last_blocked_cycle"] << ", faulted_cycles " << (*thousand)["faulted_cycles"] << ", cycle "
-      << (*thousand)["cycle"].dump();
-  EXPECT_EQ((*thousand)["threads"]["base"]["blocked_cycles"], 0) << "a base cycle blocked: " << (*thousand)["threads"]["base"].dump();
+  EXPECT_TRUE(staa::test::noBlockedCycle(*thousand)) << "a control cycle blocked (the ROS bridge must never make it wait)";
+  EXPECT_TRUE(staa::test::noBlockedCycle((*thousand)["threads"]["base"])) << "a base cycle blocked";
   std::cout << "1,000 cycles after " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
             << " s: " << (*thousand)["cycle"].dump() << "; odometry to twist " << (*thousand)["ros"]["odometry_to_twist"].dump()
             << "; faulted cycles " << (*thousand)["faulted_cycles"] << "\n";

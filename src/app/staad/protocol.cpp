@@ -334,6 +334,7 @@ void addThreadJson(Json& j, const rt::ActivityTiming& t, std::uint64_t count) {
   j["blocked_cycles"] = t.counters.blocked_cycles;
   j["faulted_cycles"] = t.counters.faulted_cycles;
   j["last_blocked_cycle"] = t.counters.last_blocked_cycle;
+  j["blocked_faulted_cycles"] = t.counters.blocked_faulted_cycles;
   // The longest cycle less its measured stall: the cycle's own work at its longest.
   j["own_execution_max_us"] = static_cast<double>(t.counters.max_own_execution) * 1e-3;
   j["skipped_periods"] = t.counters.skipped_periods;
@@ -482,6 +483,7 @@ nlohmann::json histogramsJson(std::span<const ThreadHistograms> threads) {
                  {"own_execution_max_us", static_cast<double>(c.max_own_execution) * 1e-3},
                  {"blocked_cycles", c.blocked_cycles},
                  {"faulted_cycles", c.faulted_cycles},
+                 {"blocked_faulted_cycles", c.blocked_faulted_cycles},
                  {"realtime", t.activity->realtime()}};
   }
   return j;

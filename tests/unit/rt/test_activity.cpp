@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/mman.h>
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -234,21 +236,29 @@ class Toucher final : public Runnable {
  public:
   explicit Toucher(bool touches) : touches_(touches) {}
   void start(const PeriodicLoop&) override {}
+  ~Toucher() override {
+    if (pages_ != MAP_FAILED) ::munmap(pages_, kBytes);
+  }
   void step(Nanos) override {
-    if (touches_ && next_ < kPages) {
-      // Untouched pages of one big allocation (served by mmap, mapped on first touch).
-      pages_[next_ * kPage] = 1;
+    if (touches_ && pages_ != MAP_FAILED && next_ < kPages) {
+      static_cast<volatile char*>(pages_)[next_ * kPage] = 1;
       ++next_;
     }
     steps.fetch_add(1, std::memory_order_relaxed);
   }
   void stop(Nanos) override {}
-  static constexpr std::size_t kPage = 4096, kPages = 64;
+  static constexpr std::size_t kPage = 4096, kPages = 64, kBytes = kPages * kPage;
   std::atomic<int> steps{0};
 
  private:
   bool touches_;
-  std::unique_ptr<volatile char[]> pages_{new volatile char[(kPages + 1) * kPage]};
+  // Fresh anonymous pages, mapped on first touch, one at a time (no huge pages): not heap,
+  // whose first page may share a header already touched.
+  void* pages_ = [] {
+    void* p = ::mmap(nullptr, kBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p != MAP_FAILED) ::madvise(p, kBytes, MADV_NOHUGEPAGE);
+    return p;
+  }();
   std::size_t next_ = 0;
 };
 

@@ -179,6 +179,22 @@ TEST(StallAttribution, ABodyThatBlockedIsOursNeverTheStallItsGapLooksLike) {
   q.clock.advance(5 * kNanosPerMilli);
   q.loop.finish(kNanosPerMilli, 0, -1);  // not measured: never counted
   EXPECT_EQ(q.loop.counters().blocked_cycles, 1u);
+  EXPECT_EQ(q.loop.counters().last_blocked_cycle, 1u) << "cycle 0 blocked";
+
+  // Page faults: counted per cycle, and beside a block they say the wait was on memory.
+  q.loop.wait();
+  q.loop.finish(kNanosPerMilli, 0, 2, 5);  // blocked and faulted
+  q.loop.wait();
+  q.loop.finish(kNanosPerMilli, 0, 0, 1);  // faulted only
+  q.loop.wait();
+  q.loop.finish(kNanosPerMilli, 0, 1, 0);  // blocked only: a lock or I/O
+  q.loop.wait();
+  q.loop.finish(kNanosPerMilli, 0, 0, -1);  // faults not measured
+  const PeriodicCounters& c = q.loop.counters();
+  EXPECT_EQ(c.blocked_cycles, 3u);
+  EXPECT_EQ(c.faulted_cycles, 2u);
+  EXPECT_EQ(c.blocked_faulted_cycles, 1u);
+  EXPECT_EQ(c.last_blocked_cycle, 5u) << "cycle 4 was the last that blocked";
 }
 
 // The thread's probe reads the monotonic clock: each read's gap is exactly the time since the
