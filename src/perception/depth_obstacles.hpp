@@ -11,12 +11,12 @@
 //   2. findClusters:    occupied cells that the static map does not explain (StaticMapMask),
 //                       linked into clusters when at most cluster_gap_m apart; the nearest
 //                       kMaxObstacles are kept;
+//   2b. findCuts:       with a scan, the clusters it sees only in part: a nearer return just
+//                       beyond a cluster's first or last beam (a wall's corner, another body)
+//                       cuts the body off there;
 //   3. outlineClusters: one convex polygon per cluster, the hull of its cells' corners (the
 //                       hull of the cell centres grown by half a cell), conservatively reduced
 //                       to max_vertices (it only grows);
-//   3b. findCuts:       with a scan, the clusters it sees only in part: a nearer return just
-//                       beyond a cluster's first or last beam (a wall's corner, another body)
-//                       cuts the body off there;
 //   4. trackClusters:   each cluster is matched to the nearest predicted track within a gate;
 //                       a constant-velocity Kalman filter on its point centroid gives the
 //                       velocity (the smoothed displacement over the time between frames); a
@@ -25,8 +25,8 @@
 //                       trusted as little as one cut by the image's edge, and the free end of
 //                       the body, its silhouette on the scan, gives the velocity across the
 //                       beam instead (its displacement between frames). The turn rate is the
-//                       smoothed rate at
-//                       which that velocity's direction turns (0 for slow tracks);
+//                       smoothed rate at which that velocity's direction turns (0 for slow
+//                       tracks);
 //   5. keepUnseenTracks: a track not seen this frame is forgotten after max_missed_frames if
 //                       the camera should have seen it (its place in the image, in range, not
 //                       hidden behind something nearer); out of view it is kept up to
