@@ -88,7 +88,11 @@ DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile, bool wit
   p.min_depth_m = c.min_range_m;
   p.max_range_m = c.max_range_m;
   p.max_speed_mps = 1.25 * std::max(profile.limits.v_max, -profile.limits.v_min);
-  p.acceleration_mps2 = profile.limits.a_max;
+  // The filter's white acceleration: a_max along the path and as much again across it (an
+  // agent at speed turns: v * w reaches a_max at 2 m/s and 1 rad/s). With a_max alone the
+  // velocity lagged a braking or swerving agent by up to a second (docs/results.md, "Tracks
+  // that lag a manoeuvre").
+  p.acceleration_mps2 = 2.0 * profile.limits.a_max;
   // The body's narrower side: seen from any side, at least that much of it is hidden.
   const Box box = boundingBox(profile.footprint);
   p.hidden_depth_m = std::min(box.max.x() - box.min.x(), box.max.y() - box.min.y());

@@ -40,7 +40,7 @@ DepthObstaclesConfig agentConfig() {
   DepthObstaclesConfig c;
   c.min_depth_m = 0.5;
   c.max_speed_mps = 2.5;
-  c.acceleration_mps2 = 2.0;
+  c.acceleration_mps2 = 4.0;
   c.hidden_depth_m = 0.5;
   c.self_clearance_m = 0.47;
   c.uncertainty_horizon_s = 1.0 / 3.0;
