@@ -59,8 +59,8 @@ hal::CameraMount cameraMount(const DepthCameraProfile& camera);
 
 // Perception's settings for agents of this profile: staad's defaults (DepthObstaclesConfig)
 // with the camera's range, and the others' dynamics from the profile (every agent has the
-// same): their top speed and (twice) their acceleration bound the filter, their body's depth hides behind
-// the face the camera sees.
+// same): their top speed and twice their acceleration bound the filter, their body's depth
+// hides behind the face the camera sees.
 // with_scanner (--obstacles depth+scan): the scan's returns used up to kScanRangeM.
 DepthObstaclesConfig agentPerceptionConfig(const RobotProfile& profile, bool with_scanner = false);
 // Agents closing at 2 m/s each come 8 m nearer in 2 s: about what STAA* needs to get out of

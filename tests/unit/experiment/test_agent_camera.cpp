@@ -12,8 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 namespace staa {
@@ -277,7 +277,6 @@ TEST(AgentCamera, TheTrackOfABrakingOrTurningAgentFollowsItsManoeuvre) {
   EXPECT_GT(braking_lagged, braking + 0.05);
   EXPECT_GT(turning_lagged, turning + 0.05);
 }
-
 
 }  // namespace
 }  // namespace staa
