@@ -218,7 +218,9 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
       by_camera ? options.perception.value_or(agentPerceptionConfig(robot, options.obstacles == ObstacleSource::kDepthScan))
                 : DepthObstaclesConfig{};
   const bool by_sight = options.obstacles == ObstacleSource::kSight;
-  const LineOfSight line_of_sight(by_sight ? std::span<const Polygon>(map.obstacles) : std::span<const Polygon>());
+  // Sight's filter and perception's scorer (when each contact came into the line of sight).
+  const LineOfSight line_of_sight(by_sight || by_camera ? std::span<const Polygon>(map.obstacles)
+                                                        : std::span<const Polygon>());
   std::vector<std::unique_ptr<SimAgent>> agents;
   agents.reserve(n);
   // Every agent plans against all the others: the capacity is raised to them if it is lower.
@@ -271,7 +273,7 @@ MultiSimResult runMultiAgent(const PolygonMap& map, const RobotProfile& robot, c
   std::vector<hal::PrismView> prisms(n);
   std::vector<std::size_t> others(n);
   std::vector<std::uint32_t> pixels(n);
-  PerceptionScorer scorer(by_camera ? n : 0);
+  PerceptionScorer scorer(by_camera ? n : 0, &line_of_sight, SightConfig{}.range_m);
   std::unique_ptr<record::SimRecording> recording;
   if (!options.record_path.empty()) {
     record::Session session = options.record_session;

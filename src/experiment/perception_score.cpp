@@ -78,7 +78,16 @@ void PerceptionAccuracy::merge(const PerceptionAccuracy& o) {
   perception_us_sum += o.perception_us_sum;
 }
 
-PerceptionScorer::PerceptionScorer(std::size_t agents) : n_(agents), pairs_(agents * agents) {}
+PerceptionScorer::PerceptionScorer(std::size_t agents, const LineOfSight* sight, double sight_range_m)
+    : n_(agents), sight_(sight), sight_range_m_(sight_range_m), pairs_(agents * agents) {}
+
+bool PerceptionScorer::inSight(const Vec2& eye, const Polygon& body) const {
+  const double range2 = sight_range_m_ * sight_range_m_;
+  for (const Vec2& p : body) {
+    if ((p - eye).squaredNorm() <= range2 && sight_->clear(eye, p)) return true;
+  }
+  return false;
+}
 
 void PerceptionScorer::score(const MultiWorld& world, std::size_t self, double time_s, const hal::ObstacleFrame& frame,
                              std::span<const std::size_t> others, std::span<const std::uint32_t> mover_pixels) {
@@ -136,6 +145,13 @@ void PerceptionScorer::score(const MultiWorld& world, std::size_t self, double t
     }
 
     Pair& pair = pairs_[self * n_ + j];
+    if (sight_ != nullptr && inSight(world.agent(self).pose.position(), body)) {
+      if (pair.in_sight_s < 0.0 || time_s - pair.last_in_sight_s > kSightingGapS) {
+        pair.in_sight_s = time_s;
+        pair.in_sight_m = polygonDistance(own, body);
+      }
+      pair.last_in_sight_s = time_s;
+    }
     if (best < count) {
       const bool seen = frame.obstacles[best].unseen_s == 0.0;
       const bool on = pair.sighting_s >= 0.0 && time_s - pair.covered_s <= kSightingGapS;
@@ -188,6 +204,11 @@ PerceptionScorer::Sighting PerceptionScorer::sighting(std::size_t self, std::siz
   if (out.seen) {
     out.seen_before_s = time_s - pair.sighting_s;
     out.seen_at_m = pair.sighting_m;
+  }
+  out.in_sight = pair.in_sight_s >= 0.0 && time_s - pair.last_in_sight_s <= kSightingGapS;
+  if (out.in_sight) {
+    out.in_sight_before_s = time_s - pair.in_sight_s;
+    out.in_sight_at_m = pair.in_sight_m;
   }
   return out;
 }

@@ -17,6 +17,8 @@
 // The errors go into fixed-bin histograms so that runs add up (percentiles over an
 // experiment, not means of percentiles).
 
+#include "geometry/line_of_sight.hpp"
+#include "geometry/polygon.hpp"
 #include "geometry/types.hpp"
 #include "hal/obstacles.hpp"
 
@@ -71,7 +73,9 @@ class PerceptionScorer {
   static constexpr double kSettledMps = 0.3;
   static constexpr double kMovingMps = 0.3;
 
-  explicit PerceptionScorer(std::size_t agents);
+  // `sight` (the map's line of sight; may be null) and `sight_range_m`: what Sighting's
+  // in_sight fields measure, with --obstacles sight's rule (SightObstacles).
+  explicit PerceptionScorer(std::size_t agents, const LineOfSight* sight = nullptr, double sight_range_m = 0.0);
 
   // One frame of observer `self`, taken at `time_s` with the world as it is now: its
   // obstacles, and the pixels each other agent had in it (`others[m]` is the agent index of
@@ -95,6 +99,13 @@ class PerceptionScorer {
     double seen_at_m = 0.0;      // the distance between the two footprints then
     bool covered = false;        // some frame ever had an obstacle covering `other`
     double covered_before_s = 0.0;  // the last such frame, this long before time_s
+    // The map's part: the observer's centre had a clear line to a vertex of `other` within
+    // the sight range (gaps of at most kSightingGapS), from in_sight_before_s before time_s, at
+    // this footprint distance. A contact seen about when it came into sight was hidden by a
+    // wall, not missed by the sensors.
+    bool in_sight = false;
+    double in_sight_before_s = 0.0;
+    double in_sight_at_m = 0.0;
   };
   Sighting sighting(std::size_t self, std::size_t other, double time_s) const;
 
@@ -106,8 +117,14 @@ class PerceptionScorer {
     double sighting_s = -1.0;      // the current sighting's first frame (-1: none yet)
     double sighting_m = 0.0;
     double covered_s = -1.0;       // the last frame with an obstacle covering it (-1: none)
+    double in_sight_s = -1.0;      // the current spell in the line of sight: its first frame (-1: none)
+    double in_sight_m = 0.0;
+    double last_in_sight_s = -1e9;
   };
+  bool inSight(const Vec2& eye, const Polygon& body) const;
   std::size_t n_;
+  const LineOfSight* sight_ = nullptr;
+  double sight_range_m_ = 0.0;
   std::vector<Pair> pairs_;  // n x n
   PerceptionAccuracy accuracy_;
 };

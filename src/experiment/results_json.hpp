@@ -69,6 +69,9 @@ inline nlohmann::ordered_json contactsJson(const std::vector<ContactRecord>& con
       p["seen_before_s"] = s.seen ? nlohmann::ordered_json(s.seen_before_s) : nlohmann::ordered_json(nullptr);
       p["seen_at_m"] = s.seen ? nlohmann::ordered_json(s.seen_at_m) : nlohmann::ordered_json(nullptr);
       p["covered_before_s"] = s.covered ? nlohmann::ordered_json(s.covered_before_s) : nlohmann::ordered_json(nullptr);
+      // When the map stopped hiding the other (null: it did not in the last second).
+      p["in_sight_before_s"] = s.in_sight ? nlohmann::ordered_json(s.in_sight_before_s) : nlohmann::ordered_json(nullptr);
+      p["in_sight_at_m"] = s.in_sight ? nlohmann::ordered_json(s.in_sight_at_m) : nlohmann::ordered_json(nullptr);
       j["perceived"] = std::move(p);
     }
     list.push_back(std::move(j));

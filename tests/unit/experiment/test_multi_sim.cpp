@@ -215,6 +215,12 @@ TEST(MultiSim, ADepthContactSaysWhenTheCameraFirstSawTheOther) {
   EXPECT_LT(c.sighting.covered_before_s, 0.5);
   const nlohmann::ordered_json j = contactsJson(r.contacts);
   EXPECT_DOUBLE_EQ(j[0]["perceived"]["seen_before_s"].get<double>(), c.sighting.seen_before_s);
+  // Nothing hides the ghost in the open corridor: in the line of sight (8 m) from the first
+  // frame, 4.2 m off, and seen a few frames later.
+  ASSERT_TRUE(c.sighting.in_sight);
+  EXPECT_NEAR(c.sighting.in_sight_before_s, c.time_s, 1e-9);
+  EXPECT_GE(c.sighting.in_sight_before_s, c.sighting.seen_before_s);
+  EXPECT_NEAR(c.sighting.in_sight_at_m, 4.2, 0.05);
 
   MultiSimOptions behind = scripted(SimMode::kGhost, 6.0, 300, {Pose2{6.4, 1.5, 0.0}, Pose2{1.0, 1.5, 0.0}},
                                     {{Vec2(6.5, 1.5)}, {Vec2(6.4, 1.5)}});
@@ -233,6 +239,42 @@ TEST(MultiSim, ADepthContactSaysWhenTheCameraFirstSawTheOther) {
   ASSERT_EQ(t.contacts.size(), 1u);
   EXPECT_FALSE(t.contacts[0].perceived);
   EXPECT_FALSE(contactsJson(t.contacts)[0].contains("perceived"));
+}
+
+// A side corridor from the south joins a corridor west of the observed agent, which stands
+// facing west; a ghost drives up the side corridor, 6 m, and along the corridor into it. The
+// junction's corner hides the ghost until it is nearly out of the side corridor: the contact
+// says when it came into the line of sight (in_sight_before_s: the first seconds of the run
+// hidden), and that camera and scanner saw it within a few frames of that (a wall hid it, no
+// sensor missed it). In the open corridor of the test above it was in sight from the start.
+TEST(MultiSim, ADepthContactSaysWhenTheOtherCameIntoTheLineOfSight) {
+  // The corridor: y 6.7..8.3, closed east of x 7. The side corridor: x 2.0..3.6, y 0..6.7.
+  const PolygonMap junction = openMap(14.0, 10.0, {rect(0.0, 0.0, 2.0, 6.7), rect(3.6, 0.0, 14.0, 6.7),
+                                                   rect(0.0, 8.3, 14.0, 10.0), rect(7.0, 6.7, 14.0, 8.3)});
+  MultiSimOptions o = scripted(SimMode::kGhost, 9.0, 300, {Pose2{6.0, 7.5, kPi}, Pose2{2.8, 0.5, 0.5 * kPi}},
+                               {{Vec2(6.0, 7.5)}, {Vec2(2.8, 7.5), Vec2(6.4, 7.5)}});
+  o.obstacles = ObstacleSource::kDepthScan;
+  const MultiSimResult r = runMultiAgent(junction, paperAgentProfile(), o);
+  ASSERT_EQ(r.contacts.size(), 1u);
+  const ContactRecord& c = r.contacts[0];
+  EXPECT_EQ(c.other, 1);
+  ASSERT_TRUE(c.perceived);
+  ASSERT_TRUE(c.sighting.in_sight);
+  ASSERT_TRUE(c.sighting.seen);
+  // Hidden while it drove up the side corridor (at most 2 m/s: 2.5 s or more), then in sight
+  // from the junction, about 3 m off.
+  EXPECT_GT(c.time_s - c.sighting.in_sight_before_s, 2.5);
+  EXPECT_GT(c.sighting.in_sight_before_s, 0.5);
+  EXPECT_GT(c.sighting.in_sight_at_m, 2.0);
+  EXPECT_LT(c.sighting.in_sight_at_m, 4.0);
+  // Seen within a few frames of coming into sight, never before it.
+  EXPECT_LE(c.sighting.seen_before_s, c.sighting.in_sight_before_s + 1e-9);
+  EXPECT_LT(c.sighting.in_sight_before_s - c.sighting.seen_before_s, 0.2);
+  const nlohmann::ordered_json j = contactsJson(r.contacts);
+  EXPECT_DOUBLE_EQ(j[0]["perceived"]["in_sight_before_s"].get<double>(), c.sighting.in_sight_before_s);
+  EXPECT_DOUBLE_EQ(j[0]["perceived"]["in_sight_at_m"].get<double>(), c.sighting.in_sight_at_m);
+  std::printf("junction: contact at %.2f s; in sight %.2f s before at %.2f m, seen %.2f s before at %.2f m\n", c.time_s,
+              c.sighting.in_sight_before_s, c.sighting.in_sight_at_m, c.sighting.seen_before_s, c.sighting.seen_at_m);
 }
 
 // The same corridor, the observed agent standing across it (facing the north wall) where the
