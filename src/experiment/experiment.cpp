@@ -453,6 +453,7 @@ std::string experimentJson(const ExperimentSpec& spec, const std::vector<Experim
   s["robot"] = spec.robot.name;
   s["predict_turning"] = spec.control.staa.predict_turning;
   s["lazy_heuristic"] = spec.control.staa.lazy_heuristic;
+  s["separate_contacts"] = spec.control.staa.separate_contacts;
   s["blind_corners"] = spec.control.blind_corners.enabled;
   doc["spec"] = std::move(s);
   return doc.dump(2) + "\n";

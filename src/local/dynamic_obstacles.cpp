@@ -125,6 +125,23 @@ void DynamicObstacleSet::copyFrom(const DynamicObstacleSet& other) {
   dropped_ = other.dropped_ + (other.count_ - n);
 }
 
+void DynamicObstacleSet::copyExcept(const DynamicObstacleSet& other, std::span<const std::uint8_t> drop) {
+  std::size_t n = 0, skipped = 0;
+  for (std::size_t k = 0; k < other.count_; ++k) {
+    if (k < drop.size() && drop[k] != 0) {
+      ++skipped;
+      continue;
+    }
+    if (n == obstacles_.size()) break;
+    obstacles_[n] = other.obstacles_[k];
+    velocities_[n] = other.velocities_[k];
+    turn_rates_[n] = other.turn_rates_[k];
+    ++n;
+  }
+  count_ = n;
+  dropped_ = other.dropped_ + (other.count_ - skipped - n);
+}
+
 void DynamicObstacleSet::predict(std::size_t k, double t, FixedPolygon& out) const {
   const FixedPolygon& o = obstacles_[k];
   const Vec2 shift = displacement(k, t);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -93,6 +94,9 @@ class DynamicObstacleSet {
   // Copies the obstacles of `other` (up to this set's capacity; the rest are dropped and
   // counted) keeping this set's braking hypothesis. No allocation.
   void copyFrom(const DynamicObstacleSet& other);
+  // The same without the obstacles k of `other` whose drop[k] is set (drop has other.size()
+  // entries). No allocation.
+  void copyExcept(const DynamicObstacleSet& other, std::span<const std::uint8_t> drop);
 
  private:
   static constexpr std::size_t kHullScratch = 128;  // points hulled per chunk

@@ -77,6 +77,13 @@ class CollisionChecker {
                          const DynamicObstacleSet& obstacles, double t0, double heading_spread = 0.0,
                          bool turning = false) const;
 
+  // Obstacle k at time t overlaps the footprint at `pose` grown by the dynamic margin (what
+  // every motion check above would call a collision).
+  bool touches(std::size_t k, const Pose2& pose, const DynamicObstacleSet& obstacles, double t) const {
+    bool placed = false;
+    return obstacleHits(k, pose, obstacles, t, 0.0, false, placed);
+  }
+
   // Which moving obstacles can come near a motion from `p0` over [t0, t0 + dt] on which the
   // robot's origin travels at most `travel` (heading_spread and turning as poseFreeDynamic):
   // bit k of `mask` is clear when obstacle k fails the bounding-circle tests of every sample

@@ -42,11 +42,14 @@ StaaStar::StaaStar(const StaaConfig& config, const RobotProfile& robot, const st
       actions_(robot.limits, config.notches),
       collision_(robot, local),
       heuristic_(config.heuristic, robot.limits, inflated_static, local, max_obstacles),
-      braking_obstacles_(max_obstacles) {
+      braking_obstacles_(max_obstacles),
+      contact_(max_obstacles, 0),
+      escape_obstacles_(max_obstacles) {
   braking_obstacles_.setBraking(config_.obstacle_reaction_s, config_.obstacle_brake_decel);
   root_ok_.assign(actions_.size(), 1);
   root_clear_.assign(actions_.size(), 0.0);
   root_allowed_.assign(actions_.size(), 1);
+  root_away_.assign(actions_.size(), 0);
   nodes_.reserve(config_.max_nodes);
   queue_.reserve(config_.max_nodes);
   trajectory_.reserve(config_.max_nodes > 1024 ? 1024 : config_.max_nodes);
@@ -258,6 +261,51 @@ void StaaStar::restrictRoot(const UnicycleState& start, const DynamicObstacleSet
   result.brake_safe_actions = static_cast<std::uint32_t>(allowed);
 }
 
+const DynamicObstacleSet& StaaStar::separateContacts(const UnicycleState& start, const DynamicObstacleSet& obstacles) {
+  contacts_ = 0;
+  const std::size_t n = std::min(obstacles.size(), contact_.size());
+  const Pose2 pose{start.x, start.y, start.theta};
+  std::size_t touching = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    contact_[k] = collision_.touches(k, pose, obstacles, 0.0) ? 1 : 0;
+    if (contact_[k] == 0) continue;
+    ++touching;
+    if (contacts_ < kMaxContacts) {
+      const Box& box = obstacles.observed(k).box;
+      contact_now_[contacts_] = 0.5 * (box.min + box.max);
+      contact_next_[contacts_] = contact_now_[contacts_] + obstacles.displacement(k, config_.dt);
+      ++contacts_;
+    }
+  }
+  if (touching == 0) return obstacles;
+  escape_obstacles_.copyExcept(obstacles, std::span<const std::uint8_t>(contact_.data(), n));
+  return escape_obstacles_;
+}
+
+void StaaStar::restrictToSeparation(const UnicycleState& start) {
+  if (!config_.brake_safety) std::fill(root_allowed_.begin(), root_allowed_.end(), std::uint8_t{1});
+  std::uint8_t best = 0;
+  double latest = -1.0;
+  bool any = false;
+  for (std::size_t a = 0; a < actions_.size(); ++a) {
+    const ArcVelocities vel = arcVelocities(start, actions_[a], config_.dt, limits_);
+    const Vec2 end = poseAlongArc(start, vel.v_mid, vel.w_mid, config_.dt).position();
+    bool away = true;
+    for (std::size_t c = 0; c < contacts_ && away; ++c) {
+      away = (end - contact_next_[c]).norm() > (start.position() - contact_now_[c]).norm();
+    }
+    root_away_[a] = away ? 1 : 0;
+    if (!away) continue;
+    any = true;
+    best = std::max(best, root_ok_[a]);
+    if (root_ok_[a] == 0) latest = std::max(latest, root_clear_[a]);
+  }
+  for (std::size_t a = 0; a < actions_.size(); ++a) {
+    // None moves away (a wall behind): none is allowed, the robot brakes and stays.
+    root_allowed_[a] = any && root_away_[a] != 0 && (best > 0 ? root_ok_[a] == best : root_clear_[a] >= latest);
+  }
+}
+
 void StaaStar::evaluateLazily(std::int32_t id, std::int32_t& best, PlanStats& st) {
   Node& n = nodes_[static_cast<std::size_t>(id)];
   const std::int64_t th = now();
@@ -324,7 +372,7 @@ void StaaStar::expand(std::int32_t id, const DynamicObstacleSet& obstacles, std:
   Node node = nodes_[static_cast<std::size_t>(id)];  // copy: the pool is appended below
   const int depth = node.depth + 1;
   const bool predict = depth <= config_.prediction_depth;
-  const bool restrict_root = config_.brake_safety && id == 0;
+  const bool restrict_root = (config_.brake_safety || contacts_ > 0) && id == 0;
   // Per expansion, the trigonometry of the 7 x 7 actions: the heading's cosine and sine once,
   // and one rotation per angular acceleration (the linear ones do not rotate).
   const std::size_t notches = actions_.notches();
@@ -421,16 +469,40 @@ void StaaStar::finish(const UnicycleState& start, std::int32_t best, PlanResult&
 PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
                           PlannerBudget budget) {
   PlanResult result;
-  PlanStats& st = result.stats;
   clock_ = budget.clock();
   const std::int64_t t_begin = now();
   budget.start();
+  contacts_ = 0;
+  search(start, map, obstacles, budget, result);
+  // StaaConfig::separate_contacts: standing, and every motion collides. If that is a moving
+  // obstacle the robot touches, plan again without it, first moving away from it (the pops
+  // of both searches count against the one budget).
+  constexpr double kStandingV = 0.05, kStandingW = 0.1;
+  if (config_.separate_contacts && result.outcome == PlanResult::Outcome::kBrake && std::abs(start.v) <= kStandingV &&
+      std::abs(start.w) <= kStandingW) {
+    const DynamicObstacleSet& apart = separateContacts(start, obstacles);
+    if (contacts_ > 0) {
+      const PlanStats first = result.stats;
+      result = PlanResult{};
+      result.stats = first;
+      result.contacts = static_cast<std::uint8_t>(contacts_);
+      search(start, map, apart, budget, result);
+    }
+  }
+  if (timing_) result.stats.total_ns = now() - t_begin;
+  return result;
+}
+
+void StaaStar::search(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
+                      PlannerBudget& budget, PlanResult& result) {
+  PlanStats& st = result.stats;
   beginSearch(start, map, obstacles, budget.deadline());
   std::int32_t best = 0;
   result.outcome = PlanResult::Outcome::kExhausted;
   // Braking safety of the first actions (see StaaConfig::brake_safety): only the actions of
   // the strictest tier that any action reaches are allowed; the least bad ones when none passes.
   if (config_.brake_safety) restrictRoot(start, obstacles, result);
+  if (contacts_ > 0) restrictToSeparation(start);
 
   while (!queue_.empty()) {
     // Checked on every pop (paper, Sec. III-E-6).
@@ -467,8 +539,6 @@ PlanResult StaaStar::plan(const UnicycleState& start, const LocalMap& map, const
     expand(id, obstacles, best, st);
   }
   finish(start, best, result);
-  if (timing_) st.total_ns = now() - t_begin;
-  return result;
 }
 
 }  // namespace staa

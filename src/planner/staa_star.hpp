@@ -75,6 +75,15 @@ struct StaaConfig {
   double obstacle_reaction_s = 0.3;
   double obstacle_brake_decel = 2.0;  // m/s^2
   double brake_step_s = 0.15;         // the braking manoeuvre is checked in steps of this
+  // A robot standing in contact with a moving obstacle (or with a perceived outline that
+  // reaches into it) finds every motion a collision: it would brake and stay, and two agents
+  // in contact would stay so for good. When a plan from standstill finds no free motion, it
+  // is planned again without the moving obstacles the start touches, its first action kept
+  // to those that take the robot's centre farther from theirs; the search plans on against
+  // the others. A robot that is still moving is never given this (it brakes first). Off by
+  // default: it ends standoffs but lets agents that parted touch again (docs/results.md,
+  // "Agents that stay stopped: standoffs").
+  bool separate_contacts = false;
 };
 
 struct PlanStats {
@@ -101,6 +110,7 @@ struct PlanResult {
   double best_h = 0.0;
   std::uint32_t brake_safe_actions = 0;  // first actions allowed by the braking check (at tier 0: the least bad)
   std::uint8_t brake_safety_tier = 0;    // 2: passive safety, 1: braking hypothesis, 0: none passed
+  std::uint8_t contacts = 0;  // moving obstacles the start touched (StaaConfig::separate_contacts)
   int depth = 0;              // depth of that state
   PlanStats stats;
   std::span<const UnicycleState> trajectory;  // root .. best, valid until the next plan()
@@ -184,6 +194,15 @@ class StaaStar {
   void beginSearch(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
                    const Deadline& deadline);
   void restrictRoot(const UnicycleState& start, const DynamicObstacleSet& obstacles, PlanResult& result);
+  // One search within `budget` (started) into `result` (its stats carried on).
+  void search(const UnicycleState& start, const LocalMap& map, const DynamicObstacleSet& obstacles,
+              PlannerBudget& budget, PlanResult& result);
+  // StaaConfig::separate_contacts: `obstacles`, or escape_obstacles_ (a copy without those
+  // the start touches, whose centres now and after dt go to contact_now_ / contact_next_).
+  const DynamicObstacleSet& separateContacts(const UnicycleState& start, const DynamicObstacleSet& obstacles);
+  // Keeps, of the allowed first actions, those that move away from every contact (of the best
+  // tier among them); none when none does.
+  void restrictToSeparation(const UnicycleState& start);
   void evaluateLazily(std::int32_t id, std::int32_t& best, PlanStats& st);
   void expand(std::int32_t id, const DynamicObstacleSet& obstacles, std::int32_t& best, PlanStats& st);
   void rotationsFor(const UnicycleState& s);
@@ -227,6 +246,14 @@ class StaaStar {
   std::vector<std::uint8_t> root_ok_;
   std::vector<double> root_clear_;           // brakeClearTime after each first action (0: it collides itself)
   std::vector<std::uint8_t> root_allowed_;   // the first actions the search may take
+  // Contacts (separateContacts): the obstacles left out, the set without them, and the
+  // first kMaxContacts ones' centres.
+  static constexpr std::size_t kMaxContacts = 8;
+  std::vector<std::uint8_t> contact_;
+  DynamicObstacleSet escape_obstacles_;
+  std::array<Vec2, kMaxContacts> contact_now_{}, contact_next_{};
+  std::size_t contacts_ = 0;
+  std::vector<std::uint8_t> root_away_;
   // Per expansion: the moving obstacles its motions can come near (CollisionChecker::
   // nearObstacles).
   CollisionChecker::NearObstacles near_;

@@ -54,6 +54,7 @@ void visitControlConfig(C& c, V&& v) {
   v("staa.obstacle_reaction_s", s.obstacle_reaction_s);
   v("staa.obstacle_brake_decel", s.obstacle_brake_decel);
   v("staa.brake_step_s", s.brake_step_s);
+  v("staa.separate_contacts", s.separate_contacts);
   auto& h = s.heuristic;
   v("staa.heuristic.kind", h.kind);
   v("staa.heuristic.dynamic_depth", h.dynamic_depth);

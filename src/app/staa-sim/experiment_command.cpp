@@ -143,6 +143,11 @@ void addOptions(cli::CommandLine& cl, Args& a) {
                              "on or off: STAA* computes h when a state is popped, not when it is generated "
                              "(StaaConfig::lazy_heuristic)"),
               std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, lazy_heuristic);
+  bool& separate_contacts = s.control.staa.separate_contacts;
+  cli::choice(app.add_option("--separate-contacts", separate_contacts,
+                             "on or off: STAA* leaves out a moving obstacle its start touches and first moves away "
+                             "from it (StaaConfig::separate_contacts)"),
+              std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, separate_contacts);
   bool& blind_corners = s.control.blind_corners.enabled;
   cli::choice(app.add_option("--blind-corners", blind_corners,
                              "on or off: every agent's control cycle limits its speed at the map's blind corners "

@@ -1,6 +1,7 @@
 // The 30 Hz cycle allocates nothing after start-up: 1,000 cycles of a busy scene (the office,
 // three people walking through it) with operator new counted around every step, for STAA*
-// with both heuristics, for the PD and DWA baselines, and with the blind-corner limit.
+// with both heuristics, for the PD and DWA baselines, and with the blind-corner limit; and
+// the cycles of a robot that starts in contact with a moving obstacle and backs away from it.
 #include "control/control_cycle.hpp"
 #include "control/dwa_controller.hpp"
 #include "control/pd_controller.hpp"
@@ -117,6 +118,47 @@ TEST(ControlAllocations, PassageCyclesAllocateNothing) {
   EXPECT_EQ(allocations, 0u);
   EXPECT_GT(passage_cycles, 30);
   EXPECT_GT(planned, 500);
+}
+
+// StaaConfig::separate_contacts (off by default): a robot whose front touches another body (standing, in its
+// way) backs away from it, and those cycles (the obstacle left out, the first actions kept to
+// those that move away) allocate nothing.
+TEST(ControlAllocations, CyclesInContactWithAMovingObstacleAllocateNothing) {
+  ASSERT_TRUE(rt::hookInstalled()) << "test_control_alloc must link staa_rt_alloc_hook";
+  Scenario s;
+  s.map = generateOfficeMap();
+  s.robot = paperAgentProfile();
+  s.start = {4.5, 4.5, 0.0};
+  s.goal = {22.5, 4.5, 0.0};
+  World world(s);
+  ControlConfig config;
+  config.staa.separate_contacts = true;
+  ControlCycle cycle(s.map, s.robot, config);
+  cycle.setGoal(s.goal);
+  // The robot's front edge is x = 4.9: the other body touches it.
+  const Polygon other = test::box(4.9, 4.2, 5.7, 4.8);
+  const PolygonView views[] = {PolygonView(other)};
+  const Vec2 velocities[] = {Vec2(0.0, 0.0)};
+  DynamicObstacleSet obstacles(config.max_moving_obstacles);
+  std::size_t allocations = 0;
+  int in_contact = 0;
+  for (int k = 0; k < 60; ++k) {
+    CycleInputs in;
+    const RobotState& r = world.robot();
+    in.robot = UnicycleState{r.pose.x, r.pose.y, r.pose.theta, r.v, r.w};
+    in.obstacles = &obstacles;
+    rt::AllocationScope scope;
+    obstacles.set(views, velocities);
+    const CycleOutput out = cycle.step(in, PlannerBudget::expansions(300));
+    allocations += scope.count();
+    in_contact += out.planned && out.plan.contacts > 0 ? 1 : 0;
+    world.step(1.0 / 30.0, out.v_cmd, out.w_cmd);
+  }
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(in_contact, 0);
+  // Backed out of contact: the robot's centre 3 cm or more farther from the other's (0.8 m at
+  // the start; without separate_contacts it brakes and stays there).
+  EXPECT_GT((world.robot().pose.position() - Vec2(5.3, 4.5)).norm(), 0.83);
 }
 
 }  // namespace

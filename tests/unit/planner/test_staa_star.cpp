@@ -180,6 +180,46 @@ TEST(StaaStar, WhenNoFirstActionCanStopInTimeItSlowsDownInsteadOfKeepingItsSpeed
   EXPECT_LT(close.first_action.a, 0.0) << "linear acceleration of the chosen first action";
 }
 
+// Another agent stands nose to nose with the robot, touching it (the goal lies beyond it):
+// every motion touches that obstacle, so without separate_contacts (the default) the planner
+// brakes and the robot stays for good. With it the first action backs the robot away from the
+// contact, and the rest of the plan goes round it; a moving robot is left to brake first.
+TEST(StaaStar, ARobotTouchingAMovingObstacleMovesAwayFromItInsteadOfStaying) {
+  Bench bench(paperAgentProfile(), {}, 0.5);
+  const Polygon other = box(0.4, -0.3, 1.2, 0.3);  // the robot's front edge is x = 0.4
+  const PolygonView views[] = {PolygonView{other.data(), other.size()}};
+  const Vec2 velocities[] = {Vec2(0.0, 0.0)};
+  bench.obstacles.set(views, velocities);
+  const UnicycleState start{0.0, 0.0, 0.0, 0.0, 0.0};
+  bench.update(start, Vec2(4.0, 0.0));
+
+  StaaStar stays = bench.planner();
+  const PlanResult stuck = stays.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(1000));
+  EXPECT_EQ(stuck.outcome, PlanResult::Outcome::kBrake);
+  EXPECT_EQ(stuck.contacts, 0);
+
+  bench.config.separate_contacts = true;
+  StaaStar moves = bench.planner();
+  const PlanResult r = moves.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(1000));
+  EXPECT_EQ(r.contacts, 1);
+  EXPECT_NE(r.outcome, PlanResult::Outcome::kBrake);
+  ASSERT_GE(r.trajectory.size(), 2u);
+  // Backing away: the first step ends behind the start, farther from the other's centre.
+  EXPECT_LT(r.first_action.a, 0.0);
+  EXPECT_LT(r.trajectory[1].x, start.x);
+  EXPECT_GT((r.trajectory[1].position() - Vec2(0.8, 0.0)).norm(), 0.8);
+
+  // Still moving (0.5 m/s towards it): braking comes first, nothing is left out.
+  const UnicycleState moving{0.0, 0.0, 0.0, 0.5, 0.0};
+  EXPECT_EQ(moves.plan(moving, bench.local, bench.obstacles, PlannerBudget::expansions(1000)).contacts, 0);
+
+  // Beyond the margin every motion check keeps (the sample step and 2 cm): nothing is left out.
+  const Polygon apart = box(0.55, -0.3, 1.35, 0.3);
+  const PolygonView apart_views[] = {PolygonView{apart.data(), apart.size()}};
+  bench.obstacles.set(apart_views, velocities);
+  EXPECT_EQ(moves.plan(start, bench.local, bench.obstacles, PlannerBudget::expansions(1000)).contacts, 0);
+}
+
 TEST(StaaStar, AbortsWithinBudgetAndReturnsTheLowestHeuristicState) {
   Bench bench(paperAgentProfile(), {box(3.0, -0.5, 3.5, 0.5)}, 0.5);
   const UnicycleState start{0.0, 0.0, 0.0, 0.0, 0.0};

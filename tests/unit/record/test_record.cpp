@@ -313,13 +313,13 @@ TEST(CycleRecord, TheRouteChoiceBetweenMPrimeAndThePassageMapIsMemory) {
 }
 
 TEST(RecordConfigKeys, CoverEveryField) {
-  EXPECT_EQ(controlConfigKeys(ControlConfig{}).size(), 62u);
-  EXPECT_EQ(sizeof(StaaConfig), 200u) << "StaaConfig changed: give its new field a key in record/config_keys.cpp";
+  EXPECT_EQ(controlConfigKeys(ControlConfig{}).size(), 63u);
+  EXPECT_EQ(sizeof(StaaConfig), 208u) << "StaaConfig changed: give its new field a key in record/config_keys.cpp";
   EXPECT_EQ(sizeof(HeuristicConfig), 56u) << "HeuristicConfig changed: give its new field a key";
   EXPECT_EQ(sizeof(LocalMapConfig), 48u) << "LocalMapConfig changed: give its new field a key";
   EXPECT_EQ(sizeof(GlobalPathOptions), 80u) << "GlobalPathOptions changed: give its new field a key";
   EXPECT_EQ(sizeof(BlindCornerConfig), 56u) << "BlindCornerConfig changed: give its new field a key";
-  EXPECT_EQ(sizeof(ControlConfig), 472u) << "ControlConfig changed: give its new field a key";
+  EXPECT_EQ(sizeof(ControlConfig), 480u) << "ControlConfig changed: give its new field a key";
 }
 
 TEST(RecordConfigKeys, TheRobotProfileReadsBackBitForBit) {
