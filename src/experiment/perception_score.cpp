@@ -81,14 +81,6 @@ void PerceptionAccuracy::merge(const PerceptionAccuracy& o) {
 PerceptionScorer::PerceptionScorer(std::size_t agents, const LineOfSight* sight, double sight_range_m)
     : n_(agents), sight_(sight), sight_range_m_(sight_range_m), pairs_(agents * agents) {}
 
-bool PerceptionScorer::inSight(const Vec2& eye, const Polygon& body) const {
-  const double range2 = sight_range_m_ * sight_range_m_;
-  for (const Vec2& p : body) {
-    if ((p - eye).squaredNorm() <= range2 && sight_->clear(eye, p)) return true;
-  }
-  return false;
-}
-
 void PerceptionScorer::score(const MultiWorld& world, std::size_t self, double time_s, const hal::ObstacleFrame& frame,
                              std::span<const std::size_t> others, std::span<const std::uint32_t> mover_pixels) {
   ++accuracy_.frames;
@@ -145,7 +137,7 @@ void PerceptionScorer::score(const MultiWorld& world, std::size_t self, double t
     }
 
     Pair& pair = pairs_[self * n_ + j];
-    if (sight_ != nullptr && inSight(world.agent(self).pose.position(), body)) {
+    if (sight_ != nullptr && sight_->seesAny(world.agent(self).pose.position(), body, sight_range_m_)) {
       if (pair.in_sight_s < 0.0 || time_s - pair.last_in_sight_s > kSightingGapS) {
         pair.in_sight_s = time_s;
         pair.in_sight_m = polygonDistance(own, body);

@@ -18,7 +18,6 @@
 // experiment, not means of percentiles).
 
 #include "geometry/line_of_sight.hpp"
-#include "geometry/polygon.hpp"
 #include "geometry/types.hpp"
 #include "hal/obstacles.hpp"
 
@@ -121,7 +120,6 @@ class PerceptionScorer {
     double in_sight_m = 0.0;
     double last_in_sight_s = -1e9;
   };
-  bool inSight(const Vec2& eye, const Polygon& body) const;
   std::size_t n_;
   const LineOfSight* sight_ = nullptr;
   double sight_range_m_ = 0.0;

@@ -22,18 +22,10 @@ SightObstacles::SightObstacles(const LineOfSight& sight, std::size_t bodies, std
   }
 }
 
-bool SightObstacles::sees(const Vec2& eye, PolygonView footprint) const {
-  const double range2 = config_.range_m * config_.range_m;
-  for (const Vec2& p : footprint) {
-    if ((p - eye).squaredNorm() <= range2 && sight_->clear(eye, p)) return true;
-  }
-  return false;
-}
-
 bool SightObstacles::observe(double now, const Vec2& eye, std::size_t k, PolygonView footprint, const Vec2& velocity,
                              double turn_rate) {
   const std::size_t n = std::min(footprint.size(), seen_[k].size());
-  if (sees(eye, footprint)) {
+  if (sight_->seesAny(eye, footprint, config_.range_m)) {
     std::copy_n(footprint.begin(), n, seen_[k].begin());
     std::copy_n(footprint.begin(), n, shown_[k].begin());
     count_[k] = n;

@@ -44,7 +44,6 @@ class SightObstacles {
   bool inSight(std::size_t k) const { return in_sight_[k] != 0; }
 
  private:
-  bool sees(const Vec2& eye, PolygonView footprint) const;
 
   const LineOfSight* sight_;
   SightConfig config_;

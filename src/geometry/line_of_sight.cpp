@@ -29,4 +29,12 @@ bool LineOfSight::clear(const Vec2& from, const Vec2& to) const {
   return true;
 }
 
+bool LineOfSight::seesAny(const Vec2& eye, PolygonView points, double range) const {
+  const double range2 = range * range;
+  for (const Vec2& p : points) {
+    if ((p - eye).squaredNorm() <= range2 && clear(eye, p)) return true;
+  }
+  return false;
+}
+
 }  // namespace staa

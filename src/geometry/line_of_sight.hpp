@@ -21,6 +21,8 @@ class LineOfSight {
   // The closed segment [from, to] touches no edge. A segment wholly inside a polygon touches
   // none: the callers look from free space.
   bool clear(const Vec2& from, const Vec2& to) const;
+  // Some point of `points` lies within `range` of `eye` on a clear segment from it.
+  bool seesAny(const Vec2& eye, PolygonView points, double range) const;
 
   bool empty() const { return edge_a_.empty(); }
 

@@ -145,8 +145,8 @@ void addOptions(cli::CommandLine& cl, Args& a) {
               std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, lazy_heuristic);
   bool& separate_contacts = s.control.staa.separate_contacts;
   cli::choice(app.add_option("--separate-contacts", separate_contacts,
-                             "on or off: STAA* leaves out a moving obstacle its start touches and first moves away "
-                             "from it (StaaConfig::separate_contacts)"),
+                             "on or off: a standing STAA* robot that finds no free motion plans again without the moving "
+                             "obstacles it touches, first moving away from them (StaaConfig::separate_contacts)"),
               std::vector<std::pair<std::string, bool>>{{"on", true}, {"off", false}}, separate_contacts);
   bool& blind_corners = s.control.blind_corners.enabled;
   cli::choice(app.add_option("--blind-corners", blind_corners,
