@@ -116,7 +116,6 @@ Json perceptionConfigJson(const DepthObstaclesConfig& p) {
   j["hidden_depth_m"] = p.hidden_depth_m;
   j["self_clearance_m"] = p.self_clearance_m;
   j["uncertainty_horizon_s"] = p.uncertainty_horizon_s;
-  j["point_outline_m"] = p.point_outline_m;
   j["truncated_noise_m"] = p.truncated_noise_m;
   j["max_frame_gap_s"] = p.max_frame_gap_s;
   return j;

@@ -152,7 +152,6 @@ void validateDepthObstaclesConfig(const DepthObstaclesConfig& c, double camera_o
   require("self_clearance_m", c.self_clearance_m, Range::closed(0.0, 5.0, "m"));
   require("uncertainty_horizon_s", c.uncertainty_horizon_s, Range::closed(0.0, 10.0, "s"));
   require("max_frame_gap_s", c.max_frame_gap_s, Range::above(0.0, "s"));
-  require("point_outline_m", c.point_outline_m, Range::closed(0.0, 1.0, "m"));
 }
 
 namespace {
@@ -187,15 +186,10 @@ DepthObstacleDetector::DepthObstacleDetector(const PolygonMap& map, const hal::C
   edge_.assign(cells, 0);
   sum_x_.assign(cells, 0.0F);
   sum_y_.assign(cells, 0.0F);
-  for (auto* v : {&lo_x_, &hi_x_, &lo_y_, &hi_y_}) v->assign(cells, 0.0F);
   label_.assign(cells, -1);
   queue_.assign(cells, 0);
   row_min_.assign(static_cast<std::size_t>(n_), kNoRow);
   row_max_.assign(static_cast<std::size_t>(n_), -1);
-  row_lo_x_.assign(static_cast<std::size_t>(n_), std::numeric_limits<float>::infinity());
-  row_lo_y_.assign(static_cast<std::size_t>(n_), std::numeric_limits<float>::infinity());
-  row_hi_x_.assign(static_cast<std::size_t>(n_), -std::numeric_limits<float>::infinity());
-  row_hi_y_.assign(static_cast<std::size_t>(n_), -std::numeric_limits<float>::infinity());
   rows_.assign(static_cast<std::size_t>(n_), 0);
   corners_.assign(4 * static_cast<std::size_t>(n_), Vec2::Zero());
   hull_.assign(std::max<std::size_t>(4 * static_cast<std::size_t>(n_) + 1, 2 * hal::ObstacleFrame::kMaxVertices + 1),
@@ -328,7 +322,6 @@ void DepthObstacleDetector::addScan(const ScanInput& in, DepthObstaclesStats& st
     if (!(gx >= 0.0 && gx < n && gy >= 0.0 && gy < n)) continue;
     const std::size_t k = static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) + static_cast<std::size_t>(gx);
     if (count_[k] > std::numeric_limits<std::uint16_t>::max() - weight) continue;
-    extend(k, gx, gy);
     count_[k] = static_cast<std::uint16_t>(count_[k] + weight);
     sum_x_[k] += static_cast<float>(weight * gx);
     sum_y_[k] += static_cast<float>(weight * gy);
@@ -366,7 +359,7 @@ bool DepthObstacleDetector::scanSees(const Vec2& p) const {
   return !(r >= scan.range_min && r <= scan.range_max && r < distance - config_.gate_m);
 }
 
-// Step 1: pixels -> points in the band -> counts, point sums and point extents per grid cell.
+// Step 1: pixels -> points in the band -> counts (and point sums) per grid cell.
 void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const Rays& rays, const Vec3& camera_position,
                                         const Pose2& robot, DepthObstaclesStats& stats) {
   const double cell = config_.cell_m;
@@ -407,7 +400,6 @@ void DepthObstacleDetector::backProject(const hal::DepthFrame& frame, const Rays
     if (!(gx >= 0.0 && gx < n && gy >= 0.0 && gy < n)) continue;
     const std::size_t k = static_cast<std::size_t>(gy) * static_cast<std::size_t>(n_) + static_cast<std::size_t>(gx);
     if (count_[k] == std::numeric_limits<std::uint16_t>::max()) continue;
-    extend(k, gx, gy);
     ++count_[k];
     sum_x_[k] += static_cast<float>(gx);
     sum_y_[k] += static_cast<float>(gy);
@@ -576,8 +568,6 @@ void DepthObstacleDetector::outlineClusters(hal::ObstacleFrame& out) {
 std::size_t DepthObstacleDetector::outline(const Cluster& cluster, std::span<Vec2> out) {
   // Per grid row of the cluster, its leftmost and rightmost cell: the hull of those rows'
   // outer corners is the hull of every cell's corners.
-  // With point_outline_m, the same per row of the points' extent, grown by point_outline_m.
-  const bool points = config_.point_outline_m > 0.0;
   std::size_t rows = 0;
   for (std::uint32_t q = cluster.first; q < cluster.last; ++q) {
     const std::uint32_t k = queue_[q];
@@ -586,31 +576,15 @@ std::size_t DepthObstacleDetector::outline(const Cluster& cluster, std::span<Vec
     if (row_min_[gy] == kNoRow) rows_[rows++] = static_cast<std::int32_t>(gy);
     row_min_[gy] = std::min(row_min_[gy], gx);
     row_max_[gy] = std::max(row_max_[gy], gx);
-    if (points) {
-      row_lo_x_[gy] = std::min(row_lo_x_[gy], lo_x_[k]);
-      row_hi_x_[gy] = std::max(row_hi_x_[gy], hi_x_[k]);
-      row_lo_y_[gy] = std::min(row_lo_y_[gy], lo_y_[k]);
-      row_hi_y_[gy] = std::max(row_hi_y_[gy], hi_y_[k]);
-    }
   }
   const double cell = config_.cell_m;
-  const double grow = config_.point_outline_m;
-  constexpr float kInf = std::numeric_limits<float>::infinity();
   std::size_t m = 0;
   for (std::size_t r = 0; r < rows; ++r) {
     const auto gy = static_cast<std::size_t>(rows_[r]);
-    double x0 = origin_.x() + cell * row_min_[gy];
-    double x1 = origin_.x() + cell * (row_max_[gy] + 1);
-    double y0 = origin_.y() + cell * static_cast<double>(gy);
-    double y1 = y0 + cell;
-    if (points) {
-      x0 = origin_.x() + cell * row_lo_x_[gy] - grow;
-      x1 = origin_.x() + cell * row_hi_x_[gy] + grow;
-      y0 = origin_.y() + cell * row_lo_y_[gy] - grow;
-      y1 = origin_.y() + cell * row_hi_y_[gy] + grow;
-      row_lo_x_[gy] = row_lo_y_[gy] = kInf;
-      row_hi_x_[gy] = row_hi_y_[gy] = -kInf;
-    }
+    const double x0 = origin_.x() + cell * row_min_[gy];
+    const double x1 = origin_.x() + cell * (row_max_[gy] + 1);
+    const double y0 = origin_.y() + cell * static_cast<double>(gy);
+    const double y1 = y0 + cell;
     corners_[m++] = Vec2(x0, y0);
     corners_[m++] = Vec2(x1, y0);
     corners_[m++] = Vec2(x1, y1);

@@ -14,9 +14,9 @@
 //   2b. findCuts:       with a scan, the clusters it sees only in part: a nearer return just
 //                       beyond a cluster's first or last beam (a wall's corner, another body)
 //                       cuts the body off there;
-//   3. outlineClusters: one convex polygon per cluster, the hull of its points' extent in
-//                       each row of its cells grown by point_outline_m (or, at 0, of its
-//                       cells' corners), conservatively reduced to max_vertices (it only grows);
+//   3. outlineClusters: one convex polygon per cluster, the hull of its cells' corners (the
+//                       hull of the cell centres grown by half a cell), conservatively reduced
+//                       to max_vertices (it only grows);
 //   4. trackClusters:   each cluster is matched to the nearest predicted track within a gate;
 //                       a constant-velocity Kalman filter on its point centroid gives the
 //                       velocity (the smoothed displacement over the time between frames); a
@@ -46,7 +46,6 @@
 #include "hal/camera_model.hpp"
 #include "perception/static_map_mask.hpp"
 
-#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -92,11 +91,6 @@ struct DepthObstaclesConfig {
   // (walls seen through depth noise and localisation error are not moving obstacles). It
   // hides a real obstacle standing closer than this to a wall, too.
   double static_margin_m = 0.15;
-  // > 0: each outline is the hull of the points' extent in each row of cells, grown by this (m)
-  // for the sensors' noise: the surface seen. 0: the hull of the cells' corners, up to a cell
-  // beyond the surface (at 10 cm cells a body 6 cm away reads as touching: two robots that
-  // stopped so never moved again).
-  double point_outline_m = 0.02;
   // Vertices per polygon (4..ObstacleFrame::kMaxVertices): larger hulls grow to fewer.
   std::size_t max_vertices = 16;
   // A cluster continues a track whose predicted centroid lies within this distance (m).
@@ -282,19 +276,6 @@ class DepthObstacleDetector {
   bool inView(const hal::DepthFrame& frame, const Pose2& robot, const Vec2& p) const;
   // How far a track unseen for t seconds may be from its prediction.
   double growth(const Track& track, double t) const;
-  // Cell k's point extent takes in (gx, gy) (grid units); its first point of the frame sets it.
-  void extend(std::size_t k, double gx, double gy) {
-    const auto x = static_cast<float>(gx), y = static_cast<float>(gy);
-    if (count_[k] == 0) {
-      lo_x_[k] = hi_x_[k] = x;
-      lo_y_[k] = hi_y_[k] = y;
-      return;
-    }
-    lo_x_[k] = std::min(lo_x_[k], x);
-    hi_x_[k] = std::max(hi_x_[k], x);
-    lo_y_[k] = std::min(lo_y_[k], y);
-    hi_y_[k] = std::max(hi_y_[k], y);
-  }
   // r, or less so that the outline grown by it stays self_clearance_m from the base centre.
   double clearOfSelf(std::span<const Vec2> outline, double r) const;
   std::size_t outline(const Cluster& cluster, std::span<Vec2> out);
@@ -329,12 +310,9 @@ class DepthObstacleDetector {
   std::vector<std::uint8_t> edge_;    // per cell: a point from the image's left or right edge
   std::vector<std::uint32_t> edge_cells_;  // the cells edge_ marks (cleared next frame)
   std::vector<float> sum_x_, sum_y_;  // point coordinates relative to origin_
-  // Per cell, its points' extent (grid units; set by the cell's first point of the frame).
-  std::vector<float> lo_x_, hi_x_, lo_y_, hi_y_;
   std::vector<std::int32_t> label_;   // -1: no obstacle; 0: unvisited; > 0: cluster id
   std::vector<std::uint32_t> queue_;  // flood fill queue, also the clusters' cell lists
   std::vector<std::int32_t> row_min_, row_max_;
-  std::vector<float> row_lo_x_, row_hi_x_, row_lo_y_, row_hi_y_;  // point_outline_m: per row
   std::vector<std::int32_t> rows_;
   std::vector<Vec2> corners_, hull_, extended_;
   // This frame's camera: its rotation (base <- body) and position (base frame), and its

@@ -1,8 +1,7 @@
 // DepthObstacleDetector::process on arbitrary depth frames (any millimetre values), robot
 // poses and per-frame mounts (NaN and infinities included), in the office map: two frames a
 // control period apart (the second one tracks); with flag 8 also staa-sim's agents' settings
-// over 8 frames that turn away from what was seen (kept tracks), with flag 64 outlines from
-// the cells' corners (point_outline_m 0). The obstacles are finite
+// over 8 frames that turn away from what was seen (kept tracks). The obstacles are finite
 // convex outlines of at most max_vertices with finite velocities no faster than
 // max_speed_mps, kept no longer than keep_unseen_s. With flag 16 each frame comes with a scan
 // (ScanInput) of arbitrary geometry, pose and mount, its ranges the same bytes read as floats:
@@ -106,14 +105,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // confirmed), then with the robot turned away (they leave the view and are kept, grown),
   // then an empty frame.
   if ((flags & 8) != 0) {
-    static DepthObstacleDetector points(map, hal::CameraIntrinsics{}, mount, agentConfig());
-    // Flag 64: outlines from the cells' corners (point_outline_m 0).
-    static DepthObstacleDetector cells(map, hal::CameraIntrinsics{}, mount, [] {
-      DepthObstaclesConfig c = agentConfig();
-      c.point_outline_m = 0.0;
-      return c;
-    }());
-    DepthObstacleDetector& agent = (flags & 64) != 0 ? cells : points;
+    static DepthObstacleDetector agent(map, hal::CameraIntrinsics{}, mount, agentConfig());
     agent.resetTracks();
     for (int k = 0; k < 8; ++k) {
       Pose2 at = robot;

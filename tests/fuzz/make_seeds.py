@@ -64,8 +64,6 @@ write("depth_perception", "own-mount", depth_seed(7, [2000] * 32, robot=(5.0, 3.
 # Flag 8: staa-sim's agents' settings, the robot turning away from what it saw (kept tracks).
 write("depth_perception", "agent-kept", depth_seed(8, [0] * 20 + [1800] * 12 + [0] * 8))
 write("depth_perception", "agent-kept-near", depth_seed(8, [0] * 30 + [700] * 6, robot=(4.5, 4.5, 0.0)))
-# Flag 64 with 8: the same with outlines from the cells' corners (point_outline_m 0).
-write("depth_perception", "agent-cells", depth_seed(8 | 64, [0] * 20 + [1800] * 12 + [0] * 8))
 
 # ros_depth_image: flags; (camera_info / pose fields by flags); shape; stamps; pixel bytes.
 def image_seed(shape, pixels, flags=0, stamp=1_000_000_000, received=1_010_000_000):

@@ -177,45 +177,6 @@ TEST(DepthObstacles, RobotDrivingPastAStandingBoxGivesItNoVelocity) {
   EXPECT_GT(run.world.robot().pose.x, 4.5 + 0.3);  // it really drove
 }
 
-// A standing box whose face the camera sees lies 1 cm short of a cell's far side (x = 6.39):
-// the cells' outline (point_outline_m 0) reaches back to the cell's near side, 9 cm in front of
-// the surface; the points' outline (the default, 2 cm) stays within the noise (about 6 mm at
-// 2 m here: the extremes of a few hundred rays reach 2.5 cm) and its margin of it, and covers
-// the face from end to end.
-TEST(DepthObstacles, APointOutlineHugsTheSurfaceTheCellsOutlineOvershoots) {
-  const Vec2 centre(6.59, 4.53);
-  const double face_x = centre.x() - 0.2;
-  DepthObstaclesConfig by_cells;
-  by_cells.point_outline_m = 0.0;
-  const double margin = DepthObstaclesConfig{}.point_outline_m;
-  ASSERT_EQ(margin, 0.02);
-  CorridorRun cells(test::levelMount(), {test::boxMover(centre, centre, 0.0)}, 1.7, by_cells);
-  CorridorRun points(test::levelMount(), {test::boxMover(centre, centre, 0.0)});
-  Polygon truth;
-  for (const Vec2& v : test::square(0.2)) truth.push_back(v + centre);
-  for (int k = 1; k <= 10; ++k) {
-    cells.step();
-    points.step();
-    ASSERT_EQ(cells.obstacles.count, 1u) << "frame " << k << describe(cells.obstacles);
-    ASSERT_EQ(points.obstacles.count, 1u) << "frame " << k << describe(points.obstacles);
-    SCOPED_TRACE("frame " + std::to_string(k) + describe(points.obstacles));
-    const auto& c = cells.obstacles.obstacles[0];
-    const auto& p = points.obstacles.obstacles[0];
-    EXPECT_NEAR(boundingBox(view(c)).min.x(), 6.3, 1e-6);
-    const Box b = boundingBox(view(p));
-    EXPECT_GE(b.min.x(), face_x - margin - 0.025);
-    EXPECT_LE(b.min.x(), face_x - margin);
-    for (std::size_t i = 0; i < p.n; ++i) EXPECT_LE(distanceTo(p.vertices[i], truth), margin + 0.03);
-    // The face, both ends and its middle, inside the outline or within a ray's spacing of it.
-    for (const double y : {centre.y() - 0.2, centre.y(), centre.y() + 0.2}) {
-      EXPECT_LE(distanceTo(Vec2(face_x, y), view(p)), 0.015) << "y " << y;
-    }
-  }
-  DepthObstaclesConfig bad;
-  bad.point_outline_m = -0.01;
-  EXPECT_THROW(validateDepthObstaclesConfig(bad), std::invalid_argument);
-}
-
 // A box walking a circle of radius 0.8 m at 0.8 m/s (1 rad/s) in the corridor ahead, first
 // counter-clockwise, then back clockwise: the turn rate follows, its sign with it.
 TEST(DepthObstacles, ABoxWalkingACircleTurnsAtItsRate) {
