@@ -283,7 +283,6 @@ const DynamicObstacleSet& StaaStar::separateContacts(const UnicycleState& start,
 }
 
 void StaaStar::restrictToSeparation(const UnicycleState& start) {
-  if (!config_.brake_safety) std::fill(root_allowed_.begin(), root_allowed_.end(), std::uint8_t{1});
   std::uint8_t best = 0;
   double latest = -1.0;
   bool any = false;

@@ -16,6 +16,9 @@
 namespace staa {
 namespace {
 
+// The simulated robot's state as the control cycle takes it.
+UnicycleState stateOf(const RobotState& r) { return UnicycleState{r.pose.x, r.pose.y, r.pose.theta, r.v, r.w}; }
+
 TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
   ASSERT_TRUE(rt::hookInstalled()) << "test_control_alloc must link staa_rt_alloc_hook";
   Scenario s;
@@ -68,8 +71,7 @@ TEST(ControlAllocations, ThousandBusyCyclesAllocateNothing) {
         velocities[i] = world.moverVelocity(i);
       }
       CycleInputs in;
-      const RobotState& r = world.robot();
-      in.robot = UnicycleState{r.pose.x, r.pose.y, r.pose.theta, r.v, r.w};
+      in.robot = stateOf(world.robot());
       in.obstacles = &obstacles;
       rt::AllocationScope scope;
       obstacles.set(views, velocities);
@@ -105,8 +107,7 @@ TEST(ControlAllocations, PassageCyclesAllocateNothing) {
   int passage_cycles = 0, planned = 0;
   for (int k = 0; k < 600; ++k) {
     CycleInputs in;
-    const RobotState& r = world.robot();
-    in.robot = UnicycleState{r.pose.x, r.pose.y, r.pose.theta, r.v, r.w};
+    in.robot = stateOf(world.robot());
     rt::AllocationScope scope;
     const CycleOutput out = cycle.step(in, PlannerBudget::expansions(300));
     allocations += scope.count();
@@ -144,8 +145,7 @@ TEST(ControlAllocations, CyclesInContactWithAMovingObstacleAllocateNothing) {
   int in_contact = 0;
   for (int k = 0; k < 60; ++k) {
     CycleInputs in;
-    const RobotState& r = world.robot();
-    in.robot = UnicycleState{r.pose.x, r.pose.y, r.pose.theta, r.v, r.w};
+    in.robot = stateOf(world.robot());
     in.obstacles = &obstacles;
     rt::AllocationScope scope;
     obstacles.set(views, velocities);
